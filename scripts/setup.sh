@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Sets up a fresh Debian 12 machine for tabletop hands and builds the workspace.
+#  - installs the Debian packages below if any is missing (needs root; apt only, no rosdep);
+#  - builds the catkin workspace (this repository) in Release with Debian's python3.
+# Idempotent: with everything installed and nothing changed it takes a few seconds.
+# Usage: scripts/setup.sh [extra catkin_make args]
+set -eo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+# Exact Debian packages (bookworm). ROS 1 comes from Debian's archive.
+PACKAGES=(
+  build-essential cmake ccache pkg-config
+  ros-base-dev ros-base-python-dev python3-rosbag python3-rostest python3-nose
+  libnodeletlib-dev libimage-transport-dev libcv-bridge-dev libtf2-ros-dev
+  libmessage-filters-dev librosbag-dev libdiagnostic-updater-dev libvisualization-msgs-dev
+  libpcl-dev libpcl-conversions-dev libopencv-dev libeigen3-dev libyaml-cpp-dev
+  libgtest-dev libbenchmark-dev
+  rviz xvfb x11-apps imagemagick libgl1-mesa-dri
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[setup] installing ${#missing[@]} Debian packages: ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# pyenv's python3 on PATH breaks catkin and pluginlib at configure time: use Debian's.
+export PATH=/usr/bin:/bin:$PATH
+export CCACHE_DIR="${CCACHE_DIR:-$HOME/.ccache}"
+cd "$ROOT"
+echo "[setup] building workspace in $ROOT/build (Release)"
+set +e
+catkin_make -j2 -DCMAKE_BUILD_TYPE=Release \
+  -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+  -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCATKIN_ENABLE_TESTING=ON "$@" 2>&1 |
+  grep --line-buffered -v -E '^-- |^Base path|^Source space|^Build space|^Devel space|^Install space|^#### |^Scanning dependencies'
+rc=${PIPESTATUS[0]}
+set -e
+if [ "$rc" -ne 0 ]; then echo "[setup] build FAILED (catkin_make exit $rc)"; exit "$rc"; fi
+echo "[setup] ok"
