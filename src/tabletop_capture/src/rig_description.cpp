@@ -36,6 +36,23 @@ double readScalar(const YAML::Node& cam, const std::string& field, const std::st
   return v;
 }
 
+std::string readString(const YAML::Node& node, const std::string& field, const std::string& ctx) {
+  const YAML::Node n = node[field];
+  if (!n) fail(ctx, field, "missing");
+  if (!n.IsScalar()) fail(ctx, field, "must be a string, not a list or map");
+  return n.as<std::string>();
+}
+
+// Double-quoted YAML scalar, so that names with '#', ':' or brackets survive a round trip.
+std::string quoted(const std::string& text) {
+  std::string q = "\"";
+  for (char ch : text) {
+    if (ch == '"' || ch == '\\') q += '\\';
+    q += ch;
+  }
+  return q + "\"";
+}
+
 int readInt(const YAML::Node& cam, const std::string& field, const std::string& ctx) {
   const YAML::Node n = cam[field];
   if (!n) fail(ctx, field, "missing");
@@ -110,8 +127,8 @@ RigDescription parseRigYaml(const std::string& text, const std::string& source) 
   }
   if (!root.IsMap()) throw RigError(source + ": top level must be a map with 'cameras'");
   RigDescription rig;
-  if (root["rig"]) rig.name = root["rig"].as<std::string>();
-  if (root["world_frame"]) rig.world_frame = root["world_frame"].as<std::string>();
+  if (root["rig"]) rig.name = readString(root, "rig", source);
+  if (root["world_frame"]) rig.world_frame = readString(root, "world_frame", source);
   const YAML::Node cams = root["cameras"];
   if (!cams) throw RigError(source + ": field 'cameras': missing");
   if (!cams.IsSequence() || cams.size() == 0)
@@ -122,11 +139,10 @@ RigDescription parseRigYaml(const std::string& text, const std::string& source) 
     const int idx = static_cast<int>(i);
     CameraModel c;
     if (!n.IsMap()) throw RigError(where(source, idx, "") + ": must be a map");
-    if (!n["name"]) fail(where(source, idx, ""), "name", "missing");
-    c.name = n["name"].as<std::string>();
+    c.name = readString(n, "name", where(source, idx, ""));
     const std::string ctx = where(source, idx, c.name);
     if (!names.insert(c.name).second) fail(ctx, "name", "duplicate camera name");
-    c.frame_id = n["frame_id"] ? n["frame_id"].as<std::string>() : c.name + "_optical_frame";
+    c.frame_id = n["frame_id"] ? readString(n, "frame_id", ctx) : c.name + "_optical_frame";
     c.width = readInt(n, "width", ctx);
     c.height = readInt(n, "height", ctx);
     c.fx = readScalar(n, "fx", ctx);
@@ -134,7 +150,7 @@ RigDescription parseRigYaml(const std::string& text, const std::string& source) 
     c.cx = readScalar(n, "cx", ctx);
     c.cy = readScalar(n, "cy", ctx);
     const std::string model =
-        n["distortion_model"] ? n["distortion_model"].as<std::string>() : "plumb_bob";
+        n["distortion_model"] ? readString(n, "distortion_model", ctx) : "plumb_bob";
     if (model == "plumb_bob") {
       if (n["D"]) {
         const auto d = readList(n, "D", 5, ctx);
@@ -167,14 +183,14 @@ std::string rigToYaml(const RigDescription& rig) {
   std::ostringstream s;
   s << std::setprecision(17);
   s << "# Rig description: see tabletop_capture/config/sim_rig.yaml for the format.\n";
-  s << "rig: " << rig.name << "\n";
-  s << "world_frame: " << rig.world_frame << "\n";
+  s << "rig: " << quoted(rig.name) << "\n";
+  s << "world_frame: " << quoted(rig.world_frame) << "\n";
   s << "cameras:\n";
   for (const auto& c : rig.cameras) {
     const Eigen::Matrix3d R = c.world_T_camera.linear();
     const Eigen::Vector3d t = c.world_T_camera.translation();
-    s << "  - name: " << c.name << "\n";
-    s << "    frame_id: " << c.frame_id << "\n";
+    s << "  - name: " << quoted(c.name) << "\n";
+    s << "    frame_id: " << quoted(c.frame_id) << "\n";
     s << "    width: " << c.width << "\n    height: " << c.height << "\n";
     s << "    fx: " << c.fx << "\n    fy: " << c.fy << "\n";
     s << "    cx: " << c.cx << "\n    cy: " << c.cy << "\n";

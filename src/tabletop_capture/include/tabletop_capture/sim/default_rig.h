@@ -14,8 +14,9 @@ struct DefaultRigOptions {
   bool distortion = true;  // mild barrel distortion (plumb_bob) as on the thesis' webcams
 };
 
-// Camera i sits on a ring of radius ~1.1 m around the desk, alternately 1.0 m and 1.35 m above
-// it, skipping the sector straight behind the user (their back would hide the hands).
+// Camera i sits on a ring of radius ~1.4 m around the desk, alternately 1.05 m and 1.4 m above
+// it, skipping the sector straight behind the user (their back would hide the hands), and is
+// zoomed so that the whole workspace box just fits its image.
 RigDescription makeDefaultRig(const DefaultRigOptions& options = DefaultRigOptions());
 
 // A camera at `center` looking at `target` (REP 103 optical frame, world z up).

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# README command 1: sets everything up if needed, then runs the pipeline on the simulated rig,
+# headless, with a live status line and a closing summary; writes the contact sheet of the
+# camera views and summary.txt to the output folder.
+set -eo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+usage() {
+  cat <<'USAGE'
+Usage: scripts/demo.sh [options] [extra roslaunch arg:=value ...]
+  --frames N        frame sets to render, the empty background frames included (default 300)
+  --out DIR         output folder (default ./output)
+  --cameras N       simulated cameras (default 8)
+  --script NAME     motion script: all, wave, point, fold_hands, reach_targets, leave_reenter,
+                    head_turn, static (default all)
+  --seed N          seed of the sensor noise (default 1)
+  --bayer ENC       publish Bayer images (e.g. bayer_rggb8) instead of rgb8
+  --short-sleeves   bare forearms
+  --rviz            also open rviz (under Xvfb with a screenshot in the output folder when
+                    there is no $DISPLAY)
+  -h, --help        this text
+Any NAME:=VALUE is passed to launch/demo.launch (see its argument docs).
+USAGE
+}
+
+FRAMES=300
+OUT="$PWD/output"
+RVIZ=false
+EXTRA=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --frames) FRAMES="$2"; shift 2 ;;
+    --out) OUT="$2"; shift 2 ;;
+    --cameras) EXTRA+=("cameras:=$2"); shift 2 ;;
+    --script) EXTRA+=("script:=$2"); shift 2 ;;
+    --seed) EXTRA+=("seed:=$2"); shift 2 ;;
+    --bayer) EXTRA+=("bayer:=$2"); shift 2 ;;
+    --short-sleeves) EXTRA+=("short_sleeves:=true"); shift ;;
+    --rviz) RVIZ=true; shift ;;
+    -h|--help) usage; exit 0 ;;
+    *:=*) EXTRA+=("$1"); shift ;;
+    *) echo "demo: unknown option '$1'" >&2; usage >&2; exit 2 ;;
+  esac
+done
+mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"
+
+bash "$ROOT/scripts/setup.sh"
+# shellcheck source=ros_env.sh
+source "$ROOT/scripts/ros_env.sh"
+export ROS_LOG_DIR="$OUT/ros_log"
+
+XVFB_PID=""
+SHOT_PID=""
+cleanup() {
+  [ -n "$SHOT_PID" ] && kill "$SHOT_PID" 2>/dev/null || true
+  [ -n "$XVFB_PID" ] && kill "$XVFB_PID" 2>/dev/null || true
+}
+trap cleanup EXIT
+if [ "$RVIZ" = true ] && [ -z "${DISPLAY:-}" ]; then
+  echo "[demo] no DISPLAY: rviz runs under Xvfb; a screenshot goes to $OUT/rviz.png"
+  Xvfb :87 -screen 0 1280x1024x24 >/dev/null 2>&1 &
+  XVFB_PID=$!
+  export DISPLAY=:87
+  ( sleep 15; /usr/bin/import -display :87 -window root "$OUT/rviz.png" 2>/dev/null ) &
+  SHOT_PID=$!
+fi
+
+echo "[demo] simulated rig -> synchroniser on ROS master $ROS_MASTER_URI; output in $OUT"
+set +e
+roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" monitor:=true frames:="$FRAMES" \
+  output_dir:="$OUT" rviz:="$RVIZ" "${EXTRA[@]}" 2>&1 |
+  grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()'
+rc=${PIPESTATUS[0]}
+set -e
+echo "[demo] files in $OUT: $(cd "$OUT" && ls -1 | grep -v ros_log | tr '\n' ' ')"
+exit "$rc"

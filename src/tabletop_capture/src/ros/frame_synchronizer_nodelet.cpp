@@ -1,0 +1,336 @@
+// Frame synchroniser nodelet: bundles the N camera streams (cam<i>/image_raw + camera_info)
+// into synchronised MultiViewFrame sets on `frames`, converting every image to rgb8.
+// Grouping, ordering and drop policy live in FrameSetAssembler (ROS-free, unit-tested);
+// image validation and debayering in convertToRgb8. Parameters: config/frame_synchronizer.yaml.
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <sstream>
+
+#include <boost/function.hpp>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <tabletop_msgs/MultiViewFrame.h>
+
+#include "tabletop_capture/frame_set_assembler.h"
+#include "tabletop_capture/image_conversion.h"
+#include "tabletop_capture/ros/conversions.h"
+#include "tabletop_capture/ros/published_frames.h"
+#include "tabletop_capture/running_stats.h"
+
+namespace tabletop_capture {
+
+namespace {
+std::mutex g_published_mutex;
+std::deque<const void*> g_published;
+}  // namespace
+
+void notePublishedFrame(const void* message) {
+  std::lock_guard<std::mutex> lock(g_published_mutex);
+  g_published.push_back(message);
+  while (g_published.size() > 64) g_published.pop_front();
+}
+
+bool wasPublishedFrame(const void* message) {
+  std::lock_guard<std::mutex> lock(g_published_mutex);
+  return std::find(g_published.begin(), g_published.end(), message) != g_published.end();
+}
+
+class FrameSynchronizerNodelet : public nodelet::Nodelet {
+  using ImagePtr = sensor_msgs::ImageConstPtr;
+
+  struct Camera {
+    std::string name;
+    ros::Subscriber image_sub, info_sub;
+    sensor_msgs::CameraInfoConstPtr info;  // latest valid camera_info
+    std::string info_error;                // why the latest camera_info was rejected
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    bool have_pose = false;
+    ros::WallTime pose_time;  // when the pose was last looked up
+    uint64_t images = 0, rejected = 0;
+  };
+
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    int num_cameras = 8, max_pending = 10, queue_size = 4;
+    std::string prefix = "cam";
+    FrameSetAssemblerConfig cfg;
+    pnh.param("num_cameras", num_cameras, num_cameras);
+    pnh.param("camera_prefix", prefix, prefix);
+    pnh.param("tolerance", cfg.tolerance, 0.0);
+    pnh.param("timeout", cfg.timeout, 0.2);
+    pnh.param("max_pending", max_pending, max_pending);
+    pnh.param("world_frame", world_frame_, std::string("world"));
+    pnh.param("tf_timeout", tf_timeout_, 0.05);
+    pnh.param("queue_size", queue_size, queue_size);
+    cfg.num_cameras = num_cameras;
+    cfg.max_pending = static_cast<size_t>(std::max(1, max_pending));
+    try {
+      assembler_ = std::make_unique<FrameSetAssembler<ImagePtr>>(cfg);
+    } catch (const std::exception& e) {
+      NODELET_FATAL("frame synchroniser: bad parameters: %s", e.what());
+      return;
+    }
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh);
+    cameras_.resize(num_cameras);
+    for (int i = 0; i < num_cameras; ++i) {
+      Camera& c = cameras_[i];
+      c.name = prefix + std::to_string(i);
+      boost::function<void(const ImagePtr&)> on_image = [this, i](const ImagePtr& m) {
+        onImage(i, m);
+      };
+      boost::function<void(const sensor_msgs::CameraInfoConstPtr&)> on_info =
+          [this, i](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(i, m); };
+      c.image_sub = nh.subscribe<sensor_msgs::Image>(c.name + "/image_raw", 5, on_image);
+      c.info_sub = nh.subscribe<sensor_msgs::CameraInfo>(c.name + "/camera_info", 5, on_info);
+    }
+    pub_ = nh.advertise<tabletop_msgs::MultiViewFrame>("frames", queue_size);
+    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+    diag_->setHardwareID("frame_synchronizer");
+    diag_->add("frame synchronizer", this, &FrameSynchronizerNodelet::diagnose);
+    boost::function<void(const ros::WallTimerEvent&)> on_tick = [this](const ros::WallTimerEvent&) {
+      onTick();
+    };
+    tick_ = nh.createWallTimer(ros::WallDuration(0.05), on_tick);
+    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
+      diag_->force_update();
+    };
+    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    NODELET_INFO("frame synchroniser: %d cameras (%s0..%s%d), tolerance %.4f s, timeout %.3f s",
+                 num_cameras, prefix.c_str(), prefix.c_str(), num_cameras - 1, cfg.tolerance,
+                 cfg.timeout);
+  }
+
+  void onInfo(int i, const sensor_msgs::CameraInfoConstPtr& msg) {
+    CameraModel model;
+    std::string why;
+    const bool ok = fromCameraInfo(*msg, &model, &why);
+    std::lock_guard<std::mutex> lock(mutex_);
+    Camera& c = cameras_[i];
+    if (ok) {
+      c.info = msg;
+      c.info_error.clear();
+    } else {
+      c.info_error = why;
+      NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: invalid camera_info ignored: %s",
+                             c.name.c_str(), why.c_str());
+    }
+  }
+
+  void onImage(int i, const ImagePtr& msg) {
+    const ros::WallTime t0 = ros::WallTime::now();
+    sensor_msgs::CameraInfoConstPtr info;
+    std::string info_error;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++cameras_[i].images;
+      info = cameras_[i].info;
+      info_error = cameras_[i].info_error;
+    }
+    const std::string& name = cameras_[i].name;
+    if (!info) {
+      reject(i, "no valid camera_info yet (" +
+                    (info_error.empty() ? "nothing on " + name + "/camera_info" : info_error) +
+                    "): image dropped");
+      return;
+    }
+    RawImageView view;
+    view.encoding = msg->encoding;
+    view.width = static_cast<int>(msg->width);
+    view.height = static_cast<int>(msg->height);
+    view.step = msg->step;
+    view.data = msg->data.data();
+    view.size = msg->data.size();
+    // rgb8 input is kept as the received message (no conversion, no copy yet).
+    ImagePtr rgb = msg;
+    if (msg->encoding != "rgb8" || msg->width != info->width || msg->height != info->height ||
+        msg->step < msg->width * 3 || msg->data.size() < size_t(msg->step) * msg->height) {
+      ImageConversionResult r =
+          convertToRgb8(view, static_cast<int>(info->width), static_cast<int>(info->height), name);
+      if (!r.ok) {
+        reject(i, r.error);
+        return;
+      }
+      sensor_msgs::ImagePtr out(new sensor_msgs::Image);
+      toImageMsg(r.rgb, "rgb8", out.get());
+      out->header = msg->header;
+      rgb = out;
+    }
+    const double ms = (ros::WallTime::now() - t0).toSec() * 1e3;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      convert_ms_.add(ms);
+      const std::vector<uint64_t> missing_before = assembler_->counters().missing_per_camera;
+      const AddResult r = assembler_->add(i, msg->header.stamp.toSec(), rgb);
+      newest_arrival_ = ros::WallTime::now();
+      newest_stamp_ = std::max(newest_stamp_, msg->header.stamp.toSec());
+      if (r == AddResult::kLate)
+        NODELET_WARN_THROTTLE(5.0, "frame synchroniser: %s: late image (stamp %.3f) dropped",
+                              name.c_str(), msg->header.stamp.toSec());
+      else if (r == AddResult::kDuplicate)
+        NODELET_WARN_THROTTLE(5.0, "frame synchroniser: %s: two images for one set, second dropped",
+                              name.c_str());
+      warnDropped(missing_before);
+      // Published under the lock so that sets leave in stamp order whichever thread completed them.
+      for (auto& set : assembler_->takeCompleted()) publishSet(set);
+    }
+  }
+
+  // Called with mutex_ held: names the cameras whose images were missing in dropped sets.
+  void warnDropped(const std::vector<uint64_t>& before) {
+    const auto& after = assembler_->counters().missing_per_camera;
+    std::string names;
+    for (size_t c = 0; c < after.size(); ++c)
+      if (after[c] > before[c]) names += (names.empty() ? "" : ", ") + cameras_[c].name;
+    if (!names.empty())
+      NODELET_WARN_THROTTLE(5.0, "frame synchroniser: incomplete frame set dropped, missing: %s",
+                            names.c_str());
+  }
+
+  void reject(int i, const std::string& why) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++cameras_[i].rejected;
+    NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: %s", cameras_[i].name.c_str(),
+                           why.c_str());
+  }
+
+  void onTick() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!assembler_ || newest_arrival_.isZero()) return;
+    const std::vector<uint64_t> missing_before = assembler_->counters().missing_per_camera;
+    // Stamps may come from a camera clock: advance the newest stamp by the wall time since it
+    // arrived instead of comparing stamps with the system clock.
+    assembler_->expire(newest_stamp_ + (ros::WallTime::now() - newest_arrival_).toSec());
+    warnDropped(missing_before);
+    for (auto& set : assembler_->takeCompleted()) publishSet(set);
+  }
+
+  // Called with mutex_ held. Copies each image once, into the bundle.
+  void publishSet(FrameSet<ImagePtr>& set) {
+    const ros::WallTime t0 = ros::WallTime::now();
+    tabletop_msgs::MultiViewFramePtr out(new tabletop_msgs::MultiViewFrame);
+    out->header.stamp = ros::Time(set.stamp);
+    out->header.frame_id = world_frame_;
+    const size_t n = cameras_.size();
+    out->camera_names.resize(n);
+    out->images.resize(n);
+    out->camera_infos.resize(n);
+    out->camera_poses.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      Camera& c = cameras_[i];
+      const sensor_msgs::CameraInfoConstPtr& info = c.info;
+      if (!info || !lookupPose(c, info->header.frame_id)) {
+        ++tf_failures_;
+        return;
+      }
+      out->camera_names[i] = c.name;
+      out->images[i] = *set.frames[i];  // the one copy: into the bundle
+      out->images[i].encoding = "rgb8";
+      out->camera_infos[i] = *info;
+      out->camera_infos[i].header.stamp = set.frames[i]->header.stamp;
+      out->camera_poses[i] = toTransform(c.pose);
+    }
+    notePublishedFrame(out.get());
+    pub_.publish(tabletop_msgs::MultiViewFrameConstPtr(out));
+    bundle_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
+    ++published_;
+  }
+
+  bool lookupPose(Camera& c, const std::string& frame_id) {
+    if (c.have_pose && (ros::WallTime::now() - c.pose_time).toSec() < 1.0) return true;
+    try {
+      // Static rig: the latest transform is the right one; refreshed once a second.
+      const geometry_msgs::TransformStamped t =
+          tf_buffer_.lookupTransform(world_frame_, frame_id, ros::Time(0), ros::Duration(tf_timeout_));
+      Eigen::Isometry3d pose;
+      if (!fromTransform(t.transform, &pose)) {
+        NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: tf %s -> %s is not finite",
+                               c.name.c_str(), world_frame_.c_str(), frame_id.c_str());
+        return false;
+      }
+      c.pose = pose;
+      c.have_pose = true;
+      c.pose_time = ros::WallTime::now();
+      return true;
+    } catch (const tf2::TransformException& e) {
+      if (c.have_pose) return true;  // keep the last known pose of a static camera
+      NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no tf %s -> %s (%s): set dropped",
+                             c.name.c_str(), world_frame_.c_str(), frame_id.c_str(), e.what());
+      return false;
+    }
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!assembler_) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started (bad parameters)");
+      return;
+    }
+    const ros::WallTime now = ros::WallTime::now();
+    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
+    const double rate = dt > 0 ? (published_ - published_at_last_diag_) / dt : 0.0;
+    const FrameSetCounters& k = assembler_->counters();
+    const uint64_t problems = k.incomplete() + k.late + tf_failures_;
+    uint64_t inputs = 0;
+    std::string no_info;
+    for (const Camera& c : cameras_) {
+      inputs += c.images;
+      if (!c.info) no_info += (no_info.empty() ? "" : ", ") + c.name;
+    }
+    if (inputs > 0 && !no_info.empty())
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no camera_info from " + no_info);
+    else if (inputs > 0 && rate == 0 && dt > 0 && published_ == published_at_last_diag_)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "images arrive but no complete set");
+    else if (problems > problems_at_last_diag_)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "dropping frame sets");
+    else
+      stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "ok");
+    last_diag_ = now;
+    published_at_last_diag_ = published_;
+    problems_at_last_diag_ = problems;
+    stat.add("rate (Hz)", rate);
+    stat.add("sets published", published_);
+    stat.add("sets incomplete (dropped)", k.incomplete());
+    stat.add("late images (dropped)", k.late);
+    stat.add("duplicate images (dropped)", k.duplicate);
+    stat.add("sets without tf (dropped)", tf_failures_);
+    stat.add("convert time mean (ms)", convert_ms_.mean());
+    stat.add("bundle time mean (ms)", bundle_ms_.mean());
+    stat.add("pending sets", assembler_->pendingCount());
+    for (size_t c = 0; c < cameras_.size(); ++c) {
+      std::ostringstream v;
+      v << cameras_[c].images << " received, " << cameras_[c].rejected << " rejected, "
+        << k.missing_per_camera[c] << " sets missed";
+      stat.add(cameras_[c].name, v.str());
+    }
+  }
+
+  std::unique_ptr<FrameSetAssembler<ImagePtr>> assembler_;
+  std::vector<Camera> cameras_;
+  ros::Publisher pub_;
+  tf2_ros::Buffer tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer tick_, diag_timer_;
+  std::string world_frame_;
+  double tf_timeout_ = 0.05;
+  std::mutex mutex_;
+  ros::WallTime newest_arrival_, last_diag_;
+  double newest_stamp_ = 0;
+  RunningStats convert_ms_, bundle_ms_;
+  uint64_t published_ = 0, published_at_last_diag_ = 0, problems_at_last_diag_ = 0,
+           tf_failures_ = 0;
+};
+
+}  // namespace tabletop_capture
+
+PLUGINLIB_EXPORT_CLASS(tabletop_capture::FrameSynchronizerNodelet, nodelet::Nodelet)
