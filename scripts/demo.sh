@@ -68,9 +68,12 @@ fi
 
 echo "[demo] simulated rig -> synchroniser on ROS master $ROS_MASTER_URI; output in $OUT"
 set +e
+LIVE=false
+[ -t 1 ] && LIVE=true
 roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" monitor:=true frames:="$FRAMES" \
-  output_dir:="$OUT" rviz:="$RVIZ" "${EXTRA[@]}" 2>&1 |
-  grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()'
+  output_dir:="$OUT" rviz:="$RVIZ" live_status:="$LIVE" "${EXTRA[@]}" 2>&1 |
+  sed -u 's/\x1b\[[0-9;]*m//g; s/\x1b\]2;[^\x07]*\x07//g' |
+  grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()|REQUIRED process|process has finished cleanly|^log file:|Initiating shutdown|killing on exit|shutting down processing monitor|^.{0,8}done.{0,8}$|Loading nodelet|waitForService|Unloading nodelet|Initializing nodelet|Press Ctrl-C|^\.\.\. logging|^.\]2;'
 rc=${PIPESTATUS[0]}
 set -e
 echo "[demo] files in $OUT: $(cd "$OUT" && ls -1 | grep -v ros_log | tr '\n' ' ')"

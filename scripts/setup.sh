@@ -10,7 +10,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Exact Debian packages (bookworm). ROS 1 comes from Debian's archive.
 PACKAGES=(
   build-essential cmake ccache pkg-config
-  ros-base-dev ros-base-python-dev python3-rosbag python3-rostest python3-nose
+  ros-base-dev ros-base-python-dev rosbash python3-rosbag python3-rostest python3-nose
   libnodeletlib-dev libimage-transport-dev libcv-bridge-dev libtf2-ros-dev
   libmessage-filters-dev librosbag-dev libdiagnostic-updater-dev libvisualization-msgs-dev
   libpcl-dev libpcl-conversions-dev libopencv-dev libeigen3-dev libyaml-cpp-dev

@@ -8,9 +8,12 @@
 //   ~start_timeout give up (exit code 1) if no frame set arrives within this        [60 s]
 //   ~output_dir    where contact_sheet.png and summary.txt go                       [./output]
 //   ~sheet_columns views per row of the contact sheet                               [4]
+//   ~live_status_line  overwrite one status line (terminal) instead of a line every 5 s
+//                      [stdout is a tty]
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
@@ -39,7 +42,9 @@ class DemoMonitor {
     pnh_.param("start_timeout", start_timeout_, 60.0);
     pnh_.param("output_dir", output_dir_, std::string("output"));
     pnh_.param("sheet_columns", columns_, 4);
-    tty_ = isatty(fileno(stdout));
+    // One self-overwriting status line on a terminal, a line every 5 s in logs. roslaunch
+    // pipes our stdout, so the caller says which via ~live_status_line.
+    pnh_.param("live_status_line", tty_, static_cast<bool>(isatty(fileno(stdout))));
     frames_sub_ = nh_.subscribe("frames", 4, &DemoMonitor::onFrame, this);
     truth_sub_ = nh_.subscribe("ground_truth/targets", 50, &DemoMonitor::onTruth, this);
     diag_sub_ = nh_.subscribe("/diagnostics", 50, &DemoMonitor::onDiagnostics, this);
@@ -155,11 +160,16 @@ class DemoMonitor {
           continue;
         std::string v = kv.second;
         try {
-          std::snprintf(buf, sizeof(buf), "%.2f", std::stod(v));
+          size_t used = 0;
+          const double x = std::stod(v, &used);
+          if (used == v.size() && x == std::floor(x) && std::abs(x) < 1e15)
+            std::snprintf(buf, sizeof(buf), "%.0f", x);  // counters stay integers
+          else
+            std::snprintf(buf, sizeof(buf), "%.2f", x);
           v = buf;
         } catch (...) {
         }
-        fields += "  " + kv.first + " " + v + ";";
+        fields += (fields.empty() ? " " : ", ") + kv.first + " " + v;
       }
       if (!fields.empty()) s << "  " << st.first << ":" << fields << "\n";
     }

@@ -28,22 +28,6 @@
 
 namespace tabletop_capture {
 
-namespace {
-std::mutex g_published_mutex;
-std::deque<const void*> g_published;
-}  // namespace
-
-void notePublishedFrame(const void* message) {
-  std::lock_guard<std::mutex> lock(g_published_mutex);
-  g_published.push_back(message);
-  while (g_published.size() > 64) g_published.pop_front();
-}
-
-bool wasPublishedFrame(const void* message) {
-  std::lock_guard<std::mutex> lock(g_published_mutex);
-  return std::find(g_published.begin(), g_published.end(), message) != g_published.end();
-}
-
 class FrameSynchronizerNodelet : public nodelet::Nodelet {
   using ImagePtr = sensor_msgs::ImageConstPtr;
 
@@ -218,7 +202,10 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   void publishSet(FrameSet<ImagePtr>& set) {
     const ros::WallTime t0 = ros::WallTime::now();
     tabletop_msgs::MultiViewFramePtr out(new tabletop_msgs::MultiViewFrame);
-    out->header.stamp = ros::Time(set.stamp);
+    // The earliest image stamp, taken from the messages (set.stamp is a double: it would
+    // lose nanoseconds).
+    out->header.stamp = set.frames[0]->header.stamp;
+    for (const auto& f : set.frames) out->header.stamp = std::min(out->header.stamp, f->header.stamp);
     out->header.frame_id = world_frame_;
     const size_t n = cameras_.size();
     out->camera_names.resize(n);

@@ -34,6 +34,10 @@ void writeSimBag(const sim::SimulatedRig& rig, const SimBagOptions& o,
   auto latched = boost::make_shared<ros::M_string>();
   (*latched)["latching"] = "1";
   (*latched)["callerid"] = "/sim_bag_writer";
+  // A connection header given to write() is used as is: it must describe the type too.
+  (*latched)["type"] = ros::message_traits::datatype(tf);
+  (*latched)["md5sum"] = ros::message_traits::md5sum(tf);
+  (*latched)["message_definition"] = ros::message_traits::definition(tf);
   bag.write("/tf_static", t0, tf, latched);
 
   std::vector<sensor_msgs::CameraInfo> infos;
