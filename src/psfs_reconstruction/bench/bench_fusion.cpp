@@ -1,0 +1,213 @@
+// Volume fusion timings on the reference workload (DESIGN.md section 6): the default rig's 8
+// distorted 320x240 cameras, synthetic likelihood images of a person-like cluster of spheres
+// with classifier-like noise. In the same run: foreground-class pSfS at the three reference
+// resolutions (multi-projection at 16 mm), two 83^3 hand sub-volumes that move every frame
+// (projected on the fly), the binary SfS baseline on the same projection tables, 1 and 2
+// threads, the scalar kernels, the per-frame image preparation and the table builds.
+//
+//   bench_fusion --benchmark_filter=... --benchmark_repetitions=5
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "../test/fusion_test_utils.h"
+#include "psfs_reconstruction/binary_sfs.h"
+#include "psfs_reconstruction/psfs_fusion.h"
+#include "psfs_reconstruction/simd_dispatch.h"
+#include "tabletop_capture/sim/default_rig.h"
+
+namespace psfs {
+namespace {
+
+struct Workload {
+  tabletop_capture::RigDescription rig = tabletop_capture::sim::makeDefaultRig();
+  std::vector<test::Sphere> person = {
+      {Eigen::Vector3d(0.0, -0.35, 0.35), 0.17},   // torso
+      {Eigen::Vector3d(0.0, -0.35, 0.62), 0.10},   // head
+      {Eigen::Vector3d(-0.2, -0.15, 0.25), 0.06},  // arms
+      {Eigen::Vector3d(0.2, -0.15, 0.25), 0.06},
+      {Eigen::Vector3d(-0.15, 0.05, 0.15), 0.045},  // hands
+      {Eigen::Vector3d(0.18, 0.08, 0.2), 0.045}};
+  std::vector<ViewImage> views;
+  ViewEvidence single, bilinear;
+  Workload() {
+    for (size_t c = 0; c < rig.cameras.size(); ++c) {
+      const cv::Mat mask = test::sphereLikelihood(rig.cameras[c], person, 255, 0);
+      ViewImage v;
+      v.likelihood = test::classifierLikelihood(mask, true, 17 + c);
+      views.push_back(v);
+    }
+    single.set(views, false);
+    bilinear.set(views, true);
+  }
+};
+
+Workload& workload() {
+  static Workload w;
+  return w;
+}
+
+VoxelGrid gridFor(int res) {
+  return referenceGrid(res == 16 ? Resolution::k16mm : res == 8 ? Resolution::k8mm : Resolution::k4mm);
+}
+
+// ---- per-frame image part -----------------------------------------------------------------
+void BM_Evidence(benchmark::State& st) {
+  Workload& w = workload();
+  const bool bil = st.range(0) != 0;
+  ViewEvidence ev;
+  for (auto _ : st) {
+    ev.set(w.views, bil, static_cast<int>(st.range(1)));
+    benchmark::DoNotOptimize(ev.terms(0));
+  }
+  st.SetLabel(bil ? "8 views, terms + quads" : "8 views, terms");
+}
+BENCHMARK(BM_Evidence)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"bilinear", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// ---- table builds -------------------------------------------------------------------------
+void BM_TableBuild(benchmark::State& st) {
+  Workload& w = workload();
+  const int res = static_cast<int>(st.range(0));
+  ProjectionTableOptions o;
+  o.multi_projection = res == 16;
+  o.storage = TableStorage::kPrecomputed;
+  o.threads = static_cast<int>(st.range(1));
+  size_t bytes = 0;
+  for (auto _ : st) {
+    ProjectionTable t(gridFor(res), w.rig.cameras, o);
+    bytes = t.memoryBytes();
+    benchmark::DoNotOptimize(bytes);
+  }
+  st.counters["MB"] = bytes / 1e6;
+  st.SetLabel(gridFor(res).describe());
+}
+BENCHMARK(BM_TableBuild)->ArgsProduct({{16, 8}, {1, 2}})->ArgNames({"mm", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// ---- full volumes -------------------------------------------------------------------------
+// range(0): resolution in mm; range(1): threads; range(2): 1 = scalar kernels.
+void BM_Psfs(benchmark::State& st) {
+  Workload& w = workload();
+  const int res = static_cast<int>(st.range(0));
+  const bool multi = res == 16;
+  ProjectionTableOptions to;
+  to.multi_projection = multi;
+  const ProjectionTable table(gridFor(res), w.rig.cameras, to);
+  PsfsOptions o;
+  o.multi_projection = multi;
+  o.threads = static_cast<int>(st.range(1));
+  const PsfsFusion fusion(o);
+  forceScalarKernels(st.range(2) != 0);
+  ProbabilityVolume out;
+  for (auto _ : st) {
+    fusion.fuse(table, multi ? w.bilinear : w.single, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  forceScalarKernels(false);
+  st.counters["voxels_in"] = static_cast<double>(countAbove(out, thresholdByte(o.threshold)));
+  st.counters["table_MB"] = table.memoryBytes() / 1e6;
+  st.SetLabel(table.grid().describe() + (multi ? ", multi-projection" : "") +
+              (table.precomputed() ? ", stored table" : ", projected on the fly") +
+              (st.range(2) ? ", scalar" : (avx2Available() ? ", AVX2" : ", scalar (no AVX2)")));
+}
+BENCHMARK(BM_Psfs)
+    ->ArgsProduct({{16, 8}, {1, 2}, {0}})
+    ->Args({16, 1, 1})->Args({8, 1, 1})
+    ->Args({4, 1, 0})->Args({4, 2, 0})
+    ->ArgNames({"mm", "threads", "scalar"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// pSfS at 16 mm without the multi-projection test: the like-for-like partner of binary SfS.
+void BM_PsfsSingle16(benchmark::State& st) {
+  Workload& w = workload();
+  const ProjectionTable table(gridFor(16), w.rig.cameras);
+  PsfsOptions o;
+  o.threads = static_cast<int>(st.range(0));
+  const PsfsFusion fusion(o);
+  ProbabilityVolume out;
+  for (auto _ : st) {
+    fusion.fuse(table, w.single, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  st.SetLabel(table.grid().describe() + ", single projection");
+}
+BENCHMARK(BM_PsfsSingle16)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Binary SfS baseline on the same tables (carving only; silhouettes set once: thresholding
+// the 8 images is the image part, timed in BM_BinarySilhouettes).
+void BM_Binary(benchmark::State& st) {
+  Workload& w = workload();
+  const int res = static_cast<int>(st.range(0));
+  const ProjectionTable table(gridFor(res), w.rig.cameras);
+  BinarySfsOptions o;
+  o.threads = static_cast<int>(st.range(1));
+  BinarySfs bin(o);
+  bin.setSilhouettes(w.single);
+  ProbabilityVolume out;
+  for (auto _ : st) {
+    bin.carve(table, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  st.counters["voxels_in"] = static_cast<double>(countAbove(out, 0));
+  st.SetLabel(table.grid().describe() + (table.precomputed() ? ", stored table" : ", projected on the fly"));
+}
+BENCHMARK(BM_Binary)
+    ->ArgsProduct({{16, 8}, {1, 2}})->Args({4, 1})->Args({4, 2})
+    ->ArgNames({"mm", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_BinarySilhouettes(benchmark::State& st) {
+  Workload& w = workload();
+  BinarySfs bin;
+  for (auto _ : st) bin.setSilhouettes(w.single);
+}
+BENCHMARK(BM_BinarySilhouettes)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// ---- hand sub-volumes ---------------------------------------------------------------------
+// Two 30 cm cubes at 83^3 around the hands, moving by a few millimetres every frame, so the
+// tables are re-derived each frame (cheap: on the fly) and every voxel is projected.
+void BM_HandSubVolumes(benchmark::State& st) {
+  Workload& w = workload();
+  PsfsOptions o;
+  o.threads = static_cast<int>(st.range(0));
+  const PsfsFusion fusion(o);
+  ProjectionTableOptions to;
+  to.storage = TableStorage::kOnTheFly;
+  const Eigen::Vector3d hands[2] = {w.person[4].centre, w.person[5].centre};
+  ProjectionTable tables[2] = {ProjectionTable(cubeGrid(hands[0], 0.3, 83), w.rig.cameras, to),
+                               ProjectionTable(cubeGrid(hands[1], 0.3, 83), w.rig.cameras, to)};
+  ProbabilityVolume out[2];
+  int frame = 0;
+  for (auto _ : st) {
+    const Eigen::Vector3d step(0.003 * (frame % 5), 0.002 * (frame % 3), 0.0);
+    for (int h = 0; h < 2; ++h) {
+      tables[h].update(snappedCubeGrid(hands[h] + step, 0.3, 83), w.rig.cameras);
+      fusion.fuse(tables[h], w.single, &out[h]);
+    }
+    ++frame;
+    benchmark::DoNotOptimize(out[1].data.data());
+  }
+  st.SetLabel("2 x " + out[0].grid.describe().substr(0, out[0].grid.describe().find(',')) +
+              ", projected on the fly");
+}
+BENCHMARK(BM_HandSubVolumes)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_HandSubVolumesBinary(benchmark::State& st) {
+  Workload& w = workload();
+  BinarySfsOptions o;
+  o.threads = static_cast<int>(st.range(0));
+  BinarySfs bin(o);
+  bin.setSilhouettes(w.single);
+  ProjectionTableOptions to;
+  to.storage = TableStorage::kOnTheFly;
+  const Eigen::Vector3d hands[2] = {w.person[4].centre, w.person[5].centre};
+  ProjectionTable tables[2] = {ProjectionTable(cubeGrid(hands[0], 0.3, 83), w.rig.cameras, to),
+                               ProjectionTable(cubeGrid(hands[1], 0.3, 83), w.rig.cameras, to)};
+  ProbabilityVolume out[2];
+  for (auto _ : st)
+    for (int h = 0; h < 2; ++h) bin.carve(tables[h], &out[h]);
+  st.SetLabel("2 x 83^3, projected on the fly");
+}
+BENCHMARK(BM_HandSubVolumesBinary)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace psfs
+
+BENCHMARK_MAIN();

@@ -1,0 +1,151 @@
+// Where every voxel of a grid lands in every camera: the geometric half of fusion.
+//
+// Cameras are static, so for a static grid (the full workspace volumes) the projections are
+// computed once and stored; fusion then only streams 4 bytes per voxel and camera and gathers
+// from small per-camera images. Grids that move every frame (hand sub-volumes) or that are too
+// big to store (256x256x192 x 8 cameras would be 400 MB) are projected on the fly, one x-row at
+// a time into a per-thread buffer, by the same float code, so both storages give the same bytes.
+//
+// Per voxel and camera the table holds the voxel centre's image position, packed (see PackedUV).
+// For the multi-projection test it also holds, per camera and per chunk of 8 voxels along x
+// (one SIMD vector), the image displacement of the sample points at +-1/4 voxel along x, y and z
+// (the 6 samples are centre +- these). Over 8 voxels the local Jacobian of the projection
+// changes by a few percent of a pixel-sized offset, so one set per chunk costs nothing in
+// accuracy and 1.5 bytes per voxel and camera instead of 24.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "psfs_reconstruction/voxel_grid.h"
+#include "tabletop_capture/camera_model.h"
+
+namespace psfs {
+
+// Sub-pixel image position in 32 bits, 1/16 pixel resolution. Pixel centres sit at integer
+// coordinates, so a camera's image covers u in [-0.5, width - 0.5), v in [-0.5, height - 0.5).
+// Low 16 bits: (u + 0.5) * 16, high 16 bits: (v + 0.5) * 16; the nearest pixel is then simply
+// (low >> 4, high >> 4). A point the camera does not observe (behind it, outside the image, or
+// beyond the range where the lens model is valid) is packed as u = 0, v = 16 * height, which
+// decodes to pixel index width * height: the guard pixel after each evidence image that always
+// says "no evidence". So the inner loops need no branch for unobserved voxels.
+struct PackedUV {
+  static constexpr int kFracBits = 4;
+  static constexpr int kOne = 1 << kFracBits;
+  static constexpr int kMaxImageSide = 4095;  // 16 * side must fit 16 bits
+  static uint32_t notObserved(int height) { return static_cast<uint32_t>(kOne * height) << 16; }
+  static int pixelIndex(uint32_t p, int width) {
+    return static_cast<int>(p >> (16 + kFracBits)) * width + static_cast<int>((p & 0xFFFFu) >> kFracBits);
+  }
+  static double u(uint32_t p) { return (p & 0xFFFFu) / double(kOne) - 0.5; }
+  static double v(uint32_t p) { return (p >> 16) / double(kOne) - 0.5; }
+};
+
+namespace detail {
+// Leaves resized elements uninitialised: a table is written in parallel right after it is
+// sized, so zero-filling 50 MB first (single-threaded) would only cost time.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitAllocator<U>;
+  };
+  UninitAllocator() = default;
+  template <class U>
+  UninitAllocator(const UninitAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+}  // namespace detail
+
+enum class TableStorage {
+  kAuto,         // precompute when the table fits Options::auto_max_bytes, else on the fly
+  kPrecomputed,  // static grids: compute once, stream from memory every frame
+  kOnTheFly,     // moving or huge grids: project each row when it is fused
+};
+
+struct ProjectionTableOptions {
+  bool multi_projection = false;   // also provide the 6 sample offsets per voxel
+  TableStorage storage = TableStorage::kAuto;
+  size_t auto_max_bytes = size_t(128) << 20;
+  int threads = 0;                 // OpenMP threads for building (0 = OpenMP default)
+};
+
+class ProjectionTable {
+ public:
+  // Largest sample offset the multi-projection test uses (pixels). Voxels bigger than ~8 pixels
+  // would need more than 6 samples anyway; the offsets are clamped to this.
+  static constexpr int kMaxSampleOffsetPx = 7;
+  static constexpr int kChunk = 8;  // voxels per chunk along x (one AVX2 vector of int32)
+
+  ProjectionTable() = default;
+  // Validates grid and cameras (throws std::invalid_argument naming the camera and the field:
+  // non-finite or non-positive intrinsics, bad rotation, image side > 4095 px) and builds.
+  ProjectionTable(const VoxelGrid& grid, const std::vector<tabletop_capture::CameraModel>& cameras,
+                  const ProjectionTableOptions& options = ProjectionTableOptions());
+
+  // Rebuilds only if the grid or any camera parameter changed; returns true if it rebuilt.
+  // For an on-the-fly table a rebuild is only the per-camera constants (microseconds), so a
+  // hand sub-volume can call this every frame.
+  bool update(const VoxelGrid& grid, const std::vector<tabletop_capture::CameraModel>& cameras);
+
+  const VoxelGrid& grid() const { return grid_; }
+  const ProjectionTableOptions& options() const { return options_; }
+  int numCameras() const { return static_cast<int>(cameras_.size()); }
+  const tabletop_capture::CameraModel& camera(int c) const { return cameras_[c].model; }
+  bool precomputed() const { return precomputed_; }
+  bool multiProjection() const { return options_.multi_projection; }
+  size_t memoryBytes() const;  // stored projections (0 when on the fly)
+  // What a precomputed table of this grid and these options would take.
+  static size_t precomputedBytes(const VoxelGrid& grid, int num_cameras, bool multi_projection);
+
+  // ---- Row access for the fusion kernels ------------------------------------------------
+  int paddedRowLength() const { return nxp_; }   // nx rounded up to kChunk
+  int chunksPerRow() const { return nxp_ / kChunk; }
+  size_t centreScratchSize() const { return size_t(nxp_) * cameras_.size(); }
+  size_t offsetScratchSize() const { return size_t(chunksPerRow()) * 3 * cameras_.size(); }
+  // Packed centres of grid row `row` (= y + ny * z) for all cameras: [c * paddedRowLength() + x];
+  // entries x >= nx are notObserved. Points into the table when precomputed, otherwise fills
+  // `scratch` (centreScratchSize() entries) and returns it.
+  const uint32_t* rowCentres(size_t row, uint32_t* scratch) const;
+  // Sample offsets (multi-projection tables only): [(c * chunksPerRow() + chunk) * 3 + axis],
+  // each int16 du (low) and dv (high) in 1/16 pixel, the displacement of +1/4 voxel along axis.
+  const uint32_t* rowOffsets(size_t row, uint32_t* scratch) const;
+
+  // Scalar access for tests and reference code: packed centre of voxel (x, y, z) in camera c.
+  uint32_t centre(int c, int x, int y, int z) const;
+
+ private:
+  struct Camera {
+    tabletop_capture::CameraModel model;
+    Eigen::Matrix3d camera_R_world;
+    Eigen::Vector3d position;  // camera centre in world
+    float fx, fy, cx, cy;
+    float k1, k2, p1, p2, k3;
+    bool distorted;
+    float r2_max;          // valid range of the lens model (squared normalised radius)
+    int width, height;
+  };
+  void build();
+  void projectRow(const Camera& cam, int y, int z, uint32_t* out) const;
+  void sampleOffsets(const Camera& cam, int y, int z, uint32_t* out) const;
+  static Camera prepareCamera(const tabletop_capture::CameraModel& m, int index);
+
+  VoxelGrid grid_;
+  ProjectionTableOptions options_;
+  std::vector<Camera> cameras_;
+  int nxp_ = 0;
+  bool precomputed_ = false;
+  std::vector<uint32_t, detail::UninitAllocator<uint32_t>> centres_;  // [row][camera][x]
+  std::vector<uint32_t, detail::UninitAllocator<uint32_t>> offsets_;  // [row][camera][chunk][axis]
+};
+
+}  // namespace psfs

@@ -1,0 +1,97 @@
+// Foreground-class probabilistic shape from silhouette (pSfS, thesis 4.2.2-4.2.3): the default
+// volume fusion of the pipeline.
+//
+// With C cameras, per-view posteriors P(G1[c] | c_c) (the likelihood images) and priors, a voxel
+// is in the hull iff (4.7)
+//     P(G1) * prod_c P(G1[c] | c_c) / P(G1[c])  >  t^C ,   t > 0.5.
+// We store the normalised posterior
+//     p = ( P(G1) * prod_c P(G1[c] | c_c) / P(G1[c]) )^(1/C)
+// (the per-view geometric mean), so the decision is p > t whatever C is, and the meshing stage's
+// iso level is t itself. With the priors of the thesis, P(G1) = P(H) and P(G1[c]) = P(H)^(1/C),
+// the priors cancel and p is the geometric mean of the likelihoods.
+//
+// Which views count, per voxel:
+//  * a camera that does not see the voxel (centre behind it or outside its image) gives no
+//    evidence: it is left out of the product and of C. A camera's field of view is then not a
+//    carving tool (a voxel outside one view is not declared empty), and a grid that sticks out
+//    of some views is still reconstructed from the others. A voxel seen by fewer than
+//    `min_views` cameras is set to 0 (one view alone only gives its viewing cone);
+//  * a pixel switched off by the active mask (known occlusion) also gives no evidence;
+//  * occlusion tolerance k (active camera flags used as multiple foreground classes, eq. 4.8):
+//    of the k lowest per-view likelihoods of the voxel, those below `drop_threshold` are
+//    dropped as if that view were switched off.
+// Multi-projection test (needed at 16 mm and coarser): 6 points at +-1/4 voxel along x, y, z
+// are projected per camera, each likelihood bilinearly interpolated, and the median of the 6
+// is the camera's observation.
+//
+// Implementation: log domain in 1/1024 fixed point, so the product over cameras is an integer
+// sum. The uint8 -> log-term table is applied once per pixel and frame (ViewEvidence), so the
+// single-projection inner loop is one gather and a few adds per voxel and camera; the
+// multi-projection median's log is computed by a short series (cheaper than another gather).
+// Parallel over grid rows (OpenMP), 8 voxels per AVX2 step, scalar fallback with identical
+// results. Costs on the reference rig: bench/bench_fusion.cpp.
+//
+// Use (e.g. a nodelet): tables once, evidence and fusion per frame.
+//   ProjectionTableOptions mp;  mp.multi_projection = true;
+//   ProjectionTable body_table(referenceGrid(Resolution::k16mm), cameras, mp);   // stored, 8.7 MB
+//   ProjectionTableOptions fly; fly.storage = TableStorage::kOnTheFly;
+//   ProjectionTable hand_table(snappedCubeGrid(hand, 0.30, 83), cameras, fly);
+//   PsfsOptions o;  o.multi_projection = true;  PsfsFusion body_fusion(o);
+//   per frame:  ViewEvidence body;  body.set(views /* channel 0 */, /*bilinear=*/true);
+//               body_fusion.fuse(body_table, body, &body_volume);
+//               hand_table.update(snappedCubeGrid(hand_now, 0.30, 83), cameras);  // cheap
+//               skin_fusion.fuse(hand_table, skin /* channel 1 */, &hand_volume);
+#pragma once
+
+#include "psfs_reconstruction/probability_volume.h"
+#include "psfs_reconstruction/projection_table.h"
+#include "psfs_reconstruction/view_evidence.h"
+
+namespace psfs {
+
+// Priors from expected occupancy (thesis 4.2.2). hull_occupancy = P(H_F), the expected fraction
+// of the user space inside the foreground hull. Returns P(F) = P(H_F)^(1/C).
+double foregroundViewPrior(double hull_occupancy_foreground, int num_cameras);
+// P(S) = P(H)^(1/C) / P(F), with P(H) the expected skin-hull occupancy (<= P(H_F)), so that the
+// skin-coloured-foreground view prior P(F) P(S) is P(H)^(1/C).
+double skinViewPrior(double hull_occupancy_skin, double hull_occupancy_foreground, int num_cameras);
+
+struct PsfsOptions {
+  // t, in (0.5, 1): in hull iff normalised posterior > t. The default separates "all views
+  // agree" from "one view confidently disagrees" for 6-8 views whose likelihoods the outlier
+  // model bounds to about [0.03, 0.95] (4.2.1): one such dissent gives
+  // exp((7 ln 0.95 + ln 0.03) / 8) = 0.62 < 0.75 < 0.95, while a view at 0.3 among views at
+  // 0.95 still gives 0.82. A lower t (0.6) keeps voxels that one view rejects (a fatter,
+  // occlusion-tolerant hull); use occluded_views for that on purpose. Mesh at the same level
+  // (byte iso thresholdByte(t) + 0.5) to get the hull's surface.
+  double threshold = 0.75;
+  // Priors. hull_prior = P(G1) = P(H) (expected occupancy of this class's hull),
+  // view_prior = P(G1[c]), the per-view prior the likelihood images were computed with.
+  // Leave both 0 when the classifier used view_prior = P(H)^(1/C) (the design): they cancel.
+  // Otherwise each observing view multiplies the posterior by P(H)^(1/C) / view_prior.
+  double hull_prior = 0.0;
+  double view_prior = 0.0;
+  int occluded_views = 0;       // k in [0, 4]
+  double drop_threshold = 0.0;  // 0 = threshold
+  int min_views = 2;            // >= 1
+  bool multi_projection = false;   // needs a table and evidence built for it
+  bool zero_outside_hull = false;  // store 0 instead of the posterior where p <= t
+  int threads = 0;                 // OpenMP threads (0 = OpenMP default)
+};
+
+class PsfsFusion {
+ public:
+  // Throws std::invalid_argument for options out of range or not finite.
+  explicit PsfsFusion(const PsfsOptions& options = PsfsOptions());
+  const PsfsOptions& options() const { return options_; }
+
+  // Fuses one frame into `out` (grid = table.grid(); buffer reused when the size matches).
+  // Throws std::invalid_argument if the evidence does not match the table (number of views,
+  // image sizes) or lacks what the options need (multi-projection).
+  void fuse(const ProjectionTable& table, const ViewEvidence& evidence, ProbabilityVolume* out) const;
+
+ private:
+  PsfsOptions options_;
+};
+
+}  // namespace psfs

@@ -1,0 +1,78 @@
+// The per-frame input of fusion: one likelihood image per camera, converted once per frame and
+// class into the forms the fusion loops read, and then shared by every grid fused from that
+// frame (the tracking volume and the hand sub-volumes).
+//
+//  * terms: per pixel the fixed-point log term round(1024 * ln P), or +1 ("no evidence") where
+//    the pixel is switched off, plus one guard pixel after the image that is always +1. Unobserved
+//    voxels point at the guard (PackedUV), so the single-projection loop is one gather and a few
+//    adds per voxel and camera. The log turns the product over cameras into a sum; doing it per
+//    pixel (77k per camera) instead of per voxel and camera (1.6M at 128x128x96) saves a lookup.
+//  * quads (multi-projection only): per pixel the 2x2 neighbourhood packed in 32 bits, with a
+//    replicated border, so a bilinear sample is one 32-bit gather plus two multiply-adds (what
+//    the thesis got from the GPU's texture unit).
+//  * likelihood: the plain bytes, for the reference variants (all-classes, binary SfS).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace psfs {
+
+struct ViewImage {
+  // round(255 * P(class | colour)) per pixel. CV_8UC1, or a multi-channel CV_8U image with
+  // `channel` selecting the class: the classifier's CV_8UC2 has 0 = P'(F|c) (body volumes) and
+  // 1 = P'(F,S|c) (skin volumes).
+  cv::Mat likelihood;
+  int channel = 0;
+  // Optional CV_8UC1 of the same size: 0 = pixel switched off (known occluded, or masked out);
+  // such a pixel gives no evidence at all, as if the voxel were outside that camera's image.
+  cv::Mat active;
+};
+
+class ViewEvidence {
+ public:
+  static constexpr int kLogScale = 1024;   // fixed-point scale of the log terms
+  static constexpr int16_t kNoEvidence = 1;  // term of a switched-off pixel and of the guard
+  static constexpr int kQuadPad = 8;       // replicated border of the quad images (pixels)
+
+  // Validates and converts one frame set (one image per camera, in the cameras' order).
+  // bilinear: also build the quad images (needed by the multi-projection test).
+  // Throws std::invalid_argument naming the view and the problem (empty image, not 8-bit,
+  // channel out of range, mask of another size or type, side above 4095 px).
+  void set(const std::vector<ViewImage>& views, bool bilinear, int threads = 0);
+
+  int numViews() const { return static_cast<int>(views_.size()); }
+  int width(int v) const { return views_[v].width; }
+  int height(int v) const { return views_[v].height; }
+  bool bilinear() const { return bilinear_; }
+
+  // Kernel access. terms/likelihood have width*height + 1 entries (the last is the guard) and
+  // are readable 4 bytes past it (gathers load 32 bits).
+  const int16_t* terms(int v) const { return views_[v].terms.data(); }
+  const uint8_t* likelihood(int v) const { return views_[v].likelihood.data(); }
+  const uint32_t* quads(int v) const { return views_[v].quads.data(); }
+  int quadStride(int v) const { return views_[v].width + 2 * kQuadPad; }
+  // True if some pixel of view v is switched off by its active mask.
+  bool hasInactivePixels(int v) const { return views_[v].inactive_pixels > 0; }
+  // Pixel index (or the guard) gives evidence.
+  bool observed(int v, int pixel_index) const { return views_[v].terms[pixel_index] <= 0; }
+
+  // round(kLogScale * ln(max(byte, 0.5) / 255)): a byte of 0 is read as half a quantisation step
+  // rather than as impossible, so one bad pixel lowers a voxel but cannot veto it outright.
+  static int16_t logTerm(int byte);
+
+ private:
+  struct View {
+    int width = 0, height = 0;
+    size_t inactive_pixels = 0;
+    std::vector<int16_t> terms;
+    std::vector<uint8_t> likelihood;
+    std::vector<uint32_t> quads;
+  };
+  std::vector<View> views_;
+  bool bilinear_ = false;
+};
+
+}  // namespace psfs

@@ -1,0 +1,304 @@
+#include "psfs_reconstruction/background_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "psfs_reconstruction/image_checks.h"
+#include "classifier_kernels.h"
+
+namespace psfs {
+namespace {
+
+constexpr char kMagic[8] = {'P', 'S', 'F', 'S', 'B', 'G', 'M', '1'};
+constexpr std::uint32_t kFormatVersion = 1;
+constexpr double kPi = 3.14159265358979323846;
+
+struct FileHeader {
+  char magic[8];
+  std::uint32_t version;
+  std::int32_t width, height, frames;
+  std::int32_t learning_frames;
+  float learning_rate, min_sigma_rg, min_sigma_intensity;
+};
+static_assert(sizeof(FileHeader) == 40, "FileHeader must have no padding");
+
+void validateParams(const BackgroundModelParams& p) {
+  if (p.learning_frames < 2)
+    throw std::invalid_argument("background model: learning_frames must be >= 2");
+  if (!(p.learning_rate >= 0.0f && p.learning_rate <= 1.0f))
+    throw std::invalid_argument("background model: learning_rate must be in [0, 1]");
+  if (!(p.min_sigma_rg > 0.0f && std::isfinite(p.min_sigma_rg)))
+    throw std::invalid_argument("background model: min_sigma_rg must be > 0");
+  if (!(p.min_sigma_intensity > 0.0f && std::isfinite(p.min_sigma_intensity)))
+    throw std::invalid_argument("background model: min_sigma_intensity must be > 0");
+}
+
+PSFS_ALWAYS_INLINE void updateRowParams(int w, const float* __restrict r, const float* __restrict g,
+                                        const float* __restrict in, const float* __restrict k,
+                                        float floor_rg, float floor_i, float* __restrict mr,
+                                        float* __restrict mg, float* __restrict mi,
+                                        float* __restrict vr, float* __restrict vg,
+                                        float* __restrict vi, float* __restrict sr,
+                                        float* __restrict sg) {
+  for (int x = 0; x < w; ++x) {
+    const float dr = r[x] - mr[x], dg = g[x] - mg[x], di = in[x] - mi[x];
+    mr[x] += k[x] * dr;
+    mg[x] += k[x] * dg;
+    mi[x] += k[x] * di;
+    // Variance from the deviation to the previous mean, as in an exponential moving average.
+    const float nvr = vr[x] + k[x] * (dr * dr - vr[x]);
+    const float nvg = vg[x] + k[x] * (dg * dg - vg[x]);
+    const float nvi = vi[x] + k[x] * (di * di - vi[x]);
+    vr[x] = nvr > floor_rg ? nvr : floor_rg;
+    vg[x] = nvg > floor_rg ? nvg : floor_rg;
+    vi[x] = nvi > floor_i ? nvi : floor_i;
+    sr[x] = 1.0f / std::sqrt(2.0f * vr[x]);
+    sg[x] = 1.0f / std::sqrt(2.0f * vg[x]);
+  }
+}
+
+// One row of the selective update. A function of its own so the restrict parameters let GCC
+// vectorise it, compiled per instruction set (see classifier_kernels.h). `buf` is scratch of
+// 4 * w floats.
+PSFS_TARGET_CLONES
+void updateRow(int w, const std::uint8_t* __restrict rgb, const std::uint8_t* __restrict mask,
+               float alpha, float floor_rg, float floor_i, float* __restrict buf,
+               float* __restrict mr, float* __restrict mg, float* __restrict mi,
+               float* __restrict vr, float* __restrict vg, float* __restrict vi,
+               float* __restrict sr, float* __restrict sg) {
+  float* __restrict r = buf;
+  float* __restrict g = buf + w;
+  float* __restrict in = buf + 2 * w;
+  float* __restrict k = buf + 3 * w;
+  kernels::rgbRowToRgI(rgb, w, r, g, in);
+  if (mask) {
+    for (int x = 0; x < w; ++x) k[x] = mask[x] ? 0.0f : alpha;  // (1 - f) alpha
+  } else {
+    for (int x = 0; x < w; ++x) k[x] = alpha;
+  }
+  updateRowParams(w, r, g, in, k, floor_rg, floor_i, mr, mg, mi, vr, vg, vi, sr, sg);
+}
+
+bool littleEndianHost() {
+  const std::uint16_t one = 1;
+  std::uint8_t first;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
+
+}  // namespace
+
+BackgroundModel::BackgroundModel(int width, int height, const BackgroundModelParams& params)
+    : width_(width), height_(height), params_(params) {
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument("background model: size must be positive, got " +
+                                std::to_string(width) + "x" + std::to_string(height));
+  validateParams(params);
+  const std::size_t n = std::size_t(width) * std::size_t(height);
+  for (auto* v : {&mean_r_, &mean_g_, &mean_i_, &var_r_, &var_g_, &var_i_, &scale_r_, &scale_g_})
+    v->assign(n, 0.0f);
+  for (auto& s : sum_) s.assign(n, 0.0);
+}
+
+void BackgroundModel::setParams(const BackgroundModelParams& params) {
+  validateParams(params);
+  params_ = params;
+}
+
+void BackgroundModel::addLearningFrame(const cv::Mat& rgb) {
+  if (width_ == 0) throw std::logic_error("background model: not initialised (size 0)");
+  if (ready_) throw std::logic_error("background model: learning already finished");
+  checkRgb8(rgb, width_, height_, "background learning frame");
+  std::vector<float> r(width_), g(width_), in(width_);
+  for (int y = 0; y < height_; ++y) {
+    kernels::rgbRowToRgI(rgb.ptr<std::uint8_t>(y), width_, r.data(), g.data(), in.data());
+    const std::size_t o = std::size_t(y) * width_;
+    for (int x = 0; x < width_; ++x) {
+      sum_[0][o + x] += r[x];
+      sum_[1][o + x] += g[x];
+      sum_[2][o + x] += in[x];
+      sum_[3][o + x] += double(r[x]) * r[x];
+      sum_[4][o + x] += double(g[x]) * g[x];
+      sum_[5][o + x] += double(in[x]) * in[x];
+    }
+  }
+  ++frames_;
+  if (frames_ >= params_.learning_frames) finalizeLearning();
+}
+
+void BackgroundModel::finishLearning() {
+  if (ready_) return;
+  if (frames_ < 2)
+    throw std::logic_error("background model: need >= 2 learning frames, have " +
+                           std::to_string(frames_));
+  finalizeLearning();
+}
+
+void BackgroundModel::finalizeLearning() {
+  const double n = frames_;
+  const float fr = params_.min_sigma_rg * params_.min_sigma_rg;
+  const float fi = params_.min_sigma_intensity * params_.min_sigma_intensity;
+  auto var = [n](double s, double s2) { return std::max(0.0, (s2 - s * s / n) / (n - 1.0)); };
+  for (std::size_t i = 0; i < mean_r_.size(); ++i) {
+    mean_r_[i] = float(sum_[0][i] / n);
+    mean_g_[i] = float(sum_[1][i] / n);
+    mean_i_[i] = float(sum_[2][i] / n);
+    var_r_[i] = std::max(fr, float(var(sum_[0][i], sum_[3][i])));  // unbiased sample variance
+    var_g_[i] = std::max(fr, float(var(sum_[1][i], sum_[4][i])));
+    var_i_[i] = std::max(fi, float(var(sum_[2][i], sum_[5][i])));
+  }
+  for (auto& s : sum_) std::vector<double>().swap(s);  // accumulators are not needed any more
+  refreshScales(0, mean_r_.size());
+  ready_ = true;
+}
+
+void BackgroundModel::refreshScales(std::size_t begin, std::size_t end) {
+  for (std::size_t i = begin; i < end; ++i) {
+    scale_r_[i] = 1.0f / std::sqrt(2.0f * var_r_[i]);
+    scale_g_[i] = 1.0f / std::sqrt(2.0f * var_g_[i]);
+  }
+}
+
+void BackgroundModel::update(const cv::Mat& rgb, const cv::Mat& foreground_mask, int num_threads) {
+  if (!ready_)
+    throw std::logic_error("background model: update before learning finished (" +
+                           std::to_string(frames_) + "/" + std::to_string(params_.learning_frames) +
+                           " frames)");
+  checkRgb8(rgb, width_, height_, "background update");
+  const bool has_mask = !foreground_mask.empty();
+  if (has_mask) checkMask(foreground_mask, width_, height_, "background update");
+
+  const float alpha = params_.learning_rate;
+  const float fr = params_.min_sigma_rg * params_.min_sigma_rg;
+  const float fi = params_.min_sigma_intensity * params_.min_sigma_intensity;
+  // Rows are independent; the per-row scratch lives on each thread.
+#ifdef _OPENMP
+  const int nt = num_threads > 0 ? num_threads : omp_get_max_threads();
+#pragma omp parallel num_threads(nt)
+#endif
+  {
+    std::vector<float> buf(std::size_t(width_) * 4);
+#ifdef _OPENMP
+#pragma omp for schedule(static)
+#endif
+    for (int y = 0; y < height_; ++y) {
+      const std::size_t o = std::size_t(y) * width_;
+      updateRow(width_, rgb.ptr<std::uint8_t>(y),
+                has_mask ? foreground_mask.ptr<std::uint8_t>(y) : nullptr, alpha, fr, fi,
+                buf.data(), mean_r_.data() + o, mean_g_.data() + o, mean_i_.data() + o,
+                var_r_.data() + o, var_g_.data() + o, var_i_.data() + o, scale_r_.data() + o,
+                scale_g_.data() + o);
+    }
+  }
+}
+
+BackgroundPlanes BackgroundModel::planes() const {
+  BackgroundPlanes p;
+  p.mean_r = mean_r_.data();
+  p.mean_g = mean_g_.data();
+  p.mean_intensity = mean_i_.data();
+  p.scale_r = scale_r_.data();
+  p.scale_g = scale_g_.data();
+  return p;
+}
+
+cv::Mat BackgroundModel::plane(const std::vector<float>& v) const {
+  if (v.empty()) return cv::Mat();
+  return cv::Mat(height_, width_, CV_32FC1, const_cast<float*>(v.data())).clone();
+}
+
+double BackgroundModel::density(int x, int y, double r, double g) const {
+  if (x < 0 || y < 0 || x >= width_ || y >= height_)
+    throw std::out_of_range("background model: pixel outside the image");
+  const std::size_t i = std::size_t(y) * width_ + x;
+  const double vr = var_r_[i], vg = var_g_[i];
+  const double dr = r - mean_r_[i], dg = g - mean_g_[i];
+  return std::exp(-0.5 * (dr * dr / vr + dg * dg / vg)) / (2.0 * kPi * std::sqrt(vr * vg));
+}
+
+void BackgroundModel::save(const std::string& path) const {
+  if (!ready_) throw std::logic_error("background model: only a learned model can be saved");
+  if (!littleEndianHost()) throw std::runtime_error("background model: big-endian host");
+  FileHeader h{};
+  std::memcpy(h.magic, kMagic, sizeof(kMagic));
+  h.version = kFormatVersion;
+  h.width = width_;
+  h.height = height_;
+  h.frames = frames_;
+  h.learning_frames = params_.learning_frames;
+  h.learning_rate = params_.learning_rate;
+  h.min_sigma_rg = params_.min_sigma_rg;
+  h.min_sigma_intensity = params_.min_sigma_intensity;
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  if (!f) throw std::runtime_error("background model: cannot write '" + path + "'");
+  f.write(reinterpret_cast<const char*>(&h), sizeof(h));
+  for (const auto* v : {&mean_r_, &mean_g_, &mean_i_, &var_r_, &var_g_, &var_i_})
+    f.write(reinterpret_cast<const char*>(v->data()), std::streamsize(v->size() * sizeof(float)));
+  if (!f) throw std::runtime_error("background model: error writing '" + path + "'");
+}
+
+BackgroundModel BackgroundModel::load(const std::string& path, int expected_width,
+                                      int expected_height) {
+  const std::string where = "background model '" + path + "': ";
+  if (!littleEndianHost()) throw std::runtime_error(where + "big-endian host");
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw std::runtime_error(where + "cannot open");
+  FileHeader h{};
+  if (!f.read(reinterpret_cast<char*>(&h), sizeof(h)))
+    throw std::runtime_error(where + "truncated header");
+  if (std::memcmp(h.magic, kMagic, sizeof(kMagic)) != 0)
+    throw std::runtime_error(where + "not a background model file (bad magic)");
+  if (h.version != kFormatVersion)
+    throw std::runtime_error(where + "unsupported format version " + std::to_string(h.version));
+  if (h.width <= 0 || h.height <= 0 || h.width > 16384 || h.height > 16384)
+    throw std::runtime_error(where + "implausible size " + std::to_string(h.width) + "x" +
+                             std::to_string(h.height));
+  if (expected_width > 0 && expected_height > 0 &&
+      (h.width != expected_width || h.height != expected_height))
+    throw std::runtime_error(where + "size " + std::to_string(h.width) + "x" +
+                             std::to_string(h.height) + " does not match the camera's " +
+                             std::to_string(expected_width) + "x" +
+                             std::to_string(expected_height));
+  BackgroundModelParams p;
+  p.learning_frames = h.learning_frames;
+  p.learning_rate = h.learning_rate;
+  p.min_sigma_rg = h.min_sigma_rg;
+  p.min_sigma_intensity = h.min_sigma_intensity;
+  BackgroundModel m;
+  try {
+    m = BackgroundModel(h.width, h.height, p);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(where + "invalid stored parameters: " + e.what());
+  }
+  for (auto& s : m.sum_) std::vector<double>().swap(s);
+  for (auto* v : {&m.mean_r_, &m.mean_g_, &m.mean_i_, &m.var_r_, &m.var_g_, &m.var_i_})
+    if (!f.read(reinterpret_cast<char*>(v->data()), std::streamsize(v->size() * sizeof(float))))
+      throw std::runtime_error(where + "truncated data (expected " +
+                               std::to_string(6 * v->size() * sizeof(float) + sizeof(h)) +
+                               " bytes)");
+  if (f.peek() != std::char_traits<char>::eof())
+    throw std::runtime_error(where + "trailing bytes after the model data");
+  for (std::size_t i = 0; i < m.mean_r_.size(); ++i) {
+    const bool ok = std::isfinite(m.mean_r_[i]) && std::isfinite(m.mean_g_[i]) &&
+                    std::isfinite(m.mean_i_[i]) && std::isfinite(m.var_r_[i]) &&
+                    std::isfinite(m.var_g_[i]) && std::isfinite(m.var_i_[i]) &&
+                    m.var_r_[i] > 0.0f && m.var_g_[i] > 0.0f && m.var_i_[i] > 0.0f;
+    if (!ok)
+      throw std::runtime_error(where + "non-finite or non-positive parameter at pixel (" +
+                               std::to_string(i % h.width) + ", " + std::to_string(i / h.width) +
+                               ")");
+  }
+  m.frames_ = h.frames;
+  m.refreshScales(0, m.mean_r_.size());
+  m.ready_ = true;
+  return m;
+}
+
+}  // namespace psfs

@@ -1,0 +1,407 @@
+#include "psfs_reconstruction/pixel_classifier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/LU>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "psfs_reconstruction/color_space.h"
+#include "psfs_reconstruction/image_checks.h"
+#include "classifier_kernels.h"
+
+namespace psfs {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Priors are clamped into [kMinPrior, 1 - kMinPrior] so the odds ratios stay finite; a prior
+// of exactly 0 or 1 would make every pixel certain regardless of the image anyway.
+constexpr double kMinPrior = 1e-6;
+
+double clampPrior(double p) { return std::min(1.0 - kMinPrior, std::max(kMinPrior, p)); }
+
+void validatePriors(const ClassPriors& p) {
+  if (!(p.foreground >= 0.0 && p.foreground <= 1.0))
+    throw std::invalid_argument("pixel classifier: P(F) must be in [0, 1], got " +
+                                std::to_string(p.foreground));
+  if (!(p.skin >= 0.0 && p.skin <= 1.0))
+    throw std::invalid_argument("pixel classifier: P(S) must be in [0, 1], got " +
+                                std::to_string(p.skin));
+}
+
+void validateParams(const PixelClassifierParams& p) {
+  auto unit = [](float v) { return v >= 0.0f && v <= 1.0f; };
+  if (!unit(p.foreground_outlier) || !unit(p.skin_outlier))
+    throw std::invalid_argument("pixel classifier: outlier probabilities must be in [0, 1]");
+  if (!(p.shadow_chroma_radius >= 0.0f && std::isfinite(p.shadow_chroma_radius)))
+    throw std::invalid_argument("pixel classifier: shadow_chroma_radius must be >= 0");
+  if (!(p.shadow_min_intensity_ratio >= 0.0f &&
+        p.shadow_max_intensity_ratio >= p.shadow_min_intensity_ratio &&
+        std::isfinite(p.shadow_max_intensity_ratio)))
+    throw std::invalid_argument(
+        "pixel classifier: need 0 <= shadow_min_intensity_ratio <= shadow_max_intensity_ratio");
+  if (!(p.min_chroma_intensity >= 0.0f && std::isfinite(p.min_chroma_intensity)))
+    throw std::invalid_argument("pixel classifier: min_chroma_intensity must be >= 0");
+}
+
+std::uint8_t toByte(double p) {
+  const double v = std::floor(p * 255.0 + 0.5);
+  return std::uint8_t(v < 0.0 ? 0.0 : (v > 255.0 ? 255.0 : v));
+}
+
+struct RowStats {
+  int dark = 0, saturated = 0, shadow = 0;
+  int sum_foreground_bytes = 0;  // sum of channel 0 over the row
+};
+
+}  // namespace
+
+ClassPriors ClassPriors::fromOccupancy(double hull_foreground, double hull_skin, int cameras) {
+  if (cameras < 1) throw std::invalid_argument("ClassPriors: need >= 1 camera");
+  if (!(hull_foreground > 0.0 && hull_foreground <= 1.0) || !(hull_skin >= 0.0 && hull_skin <= 1.0))
+    throw std::invalid_argument("ClassPriors: occupancy ratios must be probabilities (P(H_F) > 0)");
+  ClassPriors p;
+  p.foreground = std::pow(hull_foreground, 1.0 / cameras);
+  p.skin = std::pow(hull_skin, 1.0 / cameras) / p.foreground;
+  if (p.skin > 1.0 + 1e-12)
+    throw std::invalid_argument("ClassPriors: skin occupancy P(H) must not exceed P(H_F)");
+  p.skin = std::min(1.0, p.skin);
+  return p;
+}
+
+PixelClassifier::PixelClassifier(const GaussianMixture2D& skin, const PixelClassifierParams& params,
+                                 const ClassPriors& priors)
+    : skin_(skin), params_(params), priors_(priors) {
+  if (skin_.empty()) throw std::invalid_argument("pixel classifier: empty skin model");
+  validateParams(params_);
+  validatePriors(priors_);
+  rebuild();
+}
+
+void PixelClassifier::setParams(const PixelClassifierParams& params) {
+  validateParams(params);
+  params_ = params;
+}
+
+void PixelClassifier::setPriors(const ClassPriors& priors) {
+  validatePriors(priors);
+  priors_ = priors;
+}
+
+void PixelClassifier::rebuild() {
+  skin_terms_.clear();
+  for (const auto& c : skin_.components()) {
+    const Eigen::Matrix2d half_inv = 0.5 * c.covariance.inverse();
+    detail::SkinKernelTerm t;
+    t.mean_r = float(c.mean.x());
+    t.mean_g = float(c.mean.y());
+    t.a = float(half_inv(0, 0));
+    t.b2 = float(2.0 * half_inv(0, 1));
+    t.c = float(half_inv(1, 1));
+    t.weight = float(c.weight / (2.0 * kPi * std::sqrt(c.covariance.determinant())));
+    skin_terms_.push_back(t);
+  }
+}
+
+// ---- fast path ------------------------------------------------------------------------------
+
+namespace {
+
+// Per-frame constants of the row kernel (from the priors and parameters).
+struct RowConstants {
+  float odds_bg;                   // P(notF) / P(F), priors clamped
+  float odds_skin;                 // P(notS) / P(S)
+  float outF, keepF, outS, keepS;  // outlier model: eF P(F), 1 - eF, eS P(S), 1 - eS
+  float priorF, priorS;
+  float shadow_r2;  // squared cylinder radius; < 0 disables the cylinder
+  float lo, hi;     // intensity ratio bounds
+  float min_i;      // dark-pixel threshold
+};
+
+// Scratch for one row: 7 float rows (9 KB at 320 px: stays in L1).
+struct RowScratch {
+  std::vector<float> f;
+  explicit RowScratch(int w) : f(std::size_t(w) * 7) {}
+};
+
+// The row loops. Each is straight-line float code over contiguous arrays (selects, no
+// calls) in a function of its own, because GCC only trusts `restrict` on parameters: with
+// the no-alias guarantee and -fno-trapping-math every loop vectorises at -O3.
+
+// Foreground term: background Gaussian, shadow cylinder, outlier model, dark-pixel rule.
+PSFS_ALWAYS_INLINE void foregroundRow(const RowConstants& k, int w, const float* __restrict r,
+                                      const float* __restrict g, const float* __restrict in,
+                                      const float* __restrict mr, const float* __restrict mg,
+                                      const float* __restrict mi, const float* __restrict sr,
+                                      const float* __restrict sg, float* __restrict pf,
+                                      float* __restrict dark, float* __restrict shadow) {
+  constexpr float inv_pi = float(1.0 / kPi);
+  const float odds = k.odds_bg, min_i = k.min_i, r2 = k.shadow_r2, lo = k.lo, hi = k.hi;
+  const float outF = k.outF, keepF = k.keepF, priorF = k.priorF;
+  for (int x = 0; x < w; ++x) {
+    const float dr = r[x] - mr[x], dg = g[x] - mg[x];
+    const float ur = dr * sr[x], ug = dg * sg[x];
+    // p(c|notF) = exp(-m^2/2) / (2 pi s_r s_g) = (scale_r scale_g / pi) exp(-(ur^2 + ug^2))
+    const float p_bg = sr[x] * sg[x] * inv_pi * kernels::expNeg(ur * ur + ug * ug);
+    const float p_fc = 1.0f / (1.0f + odds * p_bg);
+    const float ix = in[x], mix = mi[x];
+    const float d = ix < min_i ? 1.0f : 0.0f;
+    const float sh_chroma = dr * dr + dg * dg < r2 ? 1.0f : 0.0f;
+    const float sh_lo = ix >= lo * mix ? 1.0f : 0.0f;
+    const float sh_hi = ix <= hi * mix ? 1.0f : 0.0f;
+    const float sh = sh_chroma * sh_lo * sh_hi * (1.0f - d);
+    const float f = outF + keepF * (1.0f - sh) * p_fc;
+    pf[x] = d * priorF + (1.0f - d) * f;
+    dark[x] = d;
+    shadow[x] = p_fc > 0.5f ? sh : 0.0f;  // counted only where the cylinder changed the call
+  }
+}
+
+// Adds one skin GMM component's density to ps.
+PSFS_ALWAYS_INLINE void skinComponentRow(const detail::SkinKernelTerm& t, int w,
+                                         const float* __restrict r, const float* __restrict g,
+                                         float* __restrict ps) {
+  for (int x = 0; x < w; ++x) {
+    const float dr = r[x] - t.mean_r, dg = g[x] - t.mean_g;
+    ps[x] += t.weight * kernels::expNeg(t.a * dr * dr + t.b2 * dr * dg + t.c * dg * dg);
+  }
+}
+
+// P'(S|c), the product, and quantisation to the two interleaved output channels.
+PSFS_ALWAYS_INLINE void outputRow(const RowConstants& k, int w, const float* __restrict pf,
+                                  const float* __restrict ps, const float* __restrict dark,
+                                  std::uint8_t* __restrict dst) {
+  const float odds = k.odds_skin, priorS = k.priorS, outS = k.outS, keepS = k.keepS;
+  for (int x = 0; x < w; ++x) {
+    const float p_sc = ps[x] / (ps[x] + odds);  // = p P(S) / (p P(S) + P(notS))
+    const float s = dark[x] * priorS + (1.0f - dark[x]) * (outS + keepS * p_sc);
+    dst[2 * x + 0] = std::uint8_t(int(pf[x] * 255.0f + 0.5f));
+    dst[2 * x + 1] = std::uint8_t(int(pf[x] * s * 255.0f + 0.5f));
+  }
+}
+
+// Counts for the diagnostics. Integer reductions only: GCC may reorder those across vector
+// lanes, while a float sum would be kept in source order (one add per element, serially).
+PSFS_ALWAYS_INLINE RowStats rowStats(int w, const float* __restrict dark,
+                                     const float* __restrict shadow,
+                                     const std::uint8_t* __restrict rgb,
+                                     const std::uint8_t* __restrict out) {
+  int n_dark = 0, n_shadow = 0, n_sat = 0, sum_f = 0;
+  for (int x = 0; x < w; ++x) {
+    n_dark += int(dark[x]);
+    n_shadow += int(shadow[x]);
+  }
+  for (int x = 0; x < w; ++x)
+    n_sat += (rgb[3 * x] == 255) | (rgb[3 * x + 1] == 255) | (rgb[3 * x + 2] == 255);
+  for (int x = 0; x < w; ++x) sum_f += out[2 * x];
+  RowStats st;
+  st.dark = n_dark;
+  st.shadow = n_shadow;
+  st.saturated = n_sat;
+  st.sum_foreground_bytes = sum_f;
+  return st;
+}
+
+// The unit of work of the OpenMP loop, compiled per instruction set (PSFS_TARGET_CLONES).
+PSFS_TARGET_CLONES
+RowStats classifyRow(const RowConstants& k, const detail::SkinKernelTerm* terms, int K,
+                     const std::uint8_t* src, int w, const BackgroundPlanes& P, std::size_t o,
+                     RowScratch& scratch, std::uint8_t* dst) {
+  float* r = scratch.f.data();
+  float* g = r + w;
+  float* in = g + w;
+  float* pf = in + w;
+  float* ps = pf + w;
+  float* dark = ps + w;
+  float* shadow = dark + w;
+  kernels::rgbRowToRgI(src, w, r, g, in);
+  foregroundRow(k, w, r, g, in, P.mean_r + o, P.mean_g + o, P.mean_intensity + o, P.scale_r + o,
+                P.scale_g + o, pf, dark, shadow);
+  std::fill(ps, ps + w, 0.0f);
+  for (int j = 0; j < K; ++j) skinComponentRow(terms[j], w, r, g, ps);
+  outputRow(k, w, pf, ps, dark, dst);
+  return rowStats(w, dark, shadow, src, dst);
+}
+
+}  // namespace
+
+void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* const* bg,
+                                   cv::Mat* out, ClassificationStats* stats, int cameras,
+                                   int num_threads) const {
+  std::vector<int> row_start(cameras + 1, 0);
+  int max_width = 0;
+  for (int c = 0; c < cameras; ++c) {
+    row_start[c + 1] = row_start[c] + rgb[c].rows;
+    max_width = std::max(max_width, rgb[c].cols);
+  }
+  const int total_rows = row_start[cameras];
+  std::vector<RowStats> row_stats(total_rows);
+
+  RowConstants k;
+  const double pF = clampPrior(priors_.foreground), pS = clampPrior(priors_.skin);
+  k.odds_bg = float((1.0 - pF) / pF);
+  k.odds_skin = float((1.0 - pS) / pS);
+  k.priorF = float(priors_.foreground);
+  k.priorS = float(priors_.skin);
+  k.outF = params_.foreground_outlier * k.priorF;
+  k.keepF = 1.0f - params_.foreground_outlier;
+  k.outS = params_.skin_outlier * k.priorS;
+  k.keepS = 1.0f - params_.skin_outlier;
+  k.shadow_r2 = params_.shadow_suppression
+                    ? params_.shadow_chroma_radius * params_.shadow_chroma_radius
+                    : -1.0f;
+  k.lo = params_.shadow_min_intensity_ratio;
+  k.hi = params_.shadow_max_intensity_ratio;
+  k.min_i = params_.min_chroma_intensity;
+  const detail::SkinKernelTerm* terms = skin_terms_.data();
+  const int K = int(skin_terms_.size());
+
+#ifdef _OPENMP
+  const int nt = num_threads > 0 ? num_threads : omp_get_max_threads();
+#pragma omp parallel num_threads(nt)
+#endif
+  {
+    RowScratch scratch(max_width);
+    // Static split of all rows: each thread gets a contiguous half of the frame set. (A
+    // dynamic schedule measured no better, also with other processes on the cores.)
+#ifdef _OPENMP
+#pragma omp for schedule(static)
+#endif
+    for (int row = 0; row < total_rows; ++row) {
+      int cam = 0;
+      while (row >= row_start[cam + 1]) ++cam;
+      const int y = row - row_start[cam];
+      const int w = rgb[cam].cols;
+      row_stats[row] =
+          classifyRow(k, terms, K, rgb[cam].ptr<std::uint8_t>(y), w, bg[cam]->planes(),
+                      std::size_t(y) * std::size_t(w), scratch, out[cam].ptr<std::uint8_t>(y));
+    }
+  }
+
+  for (int c = 0; c < cameras; ++c) {
+    ClassificationStats s;
+    s.pixels = rgb[c].rows * rgb[c].cols;
+    double sum = 0.0;
+    for (int row = row_start[c]; row < row_start[c + 1]; ++row) {
+      s.dark_pixels += row_stats[row].dark;
+      s.saturated_pixels += row_stats[row].saturated;
+      s.shadow_pixels += row_stats[row].shadow;
+      sum += row_stats[row].sum_foreground_bytes;
+    }
+    s.mean_foreground = s.pixels ? sum / (255.0 * s.pixels) : 0.0;
+    stats[c] = s;
+  }
+}
+
+ClassificationStats PixelClassifier::classify(const cv::Mat& rgb, const BackgroundModel& background,
+                                              cv::Mat& likelihood, int num_threads) const {
+  if (!background.ready())
+    throw std::invalid_argument("pixel classifier: background model not learned yet (" +
+                                std::to_string(background.learnedFrames()) + " frames)");
+  checkRgb8(rgb, background.width(), background.height(), "pixel classifier");
+  likelihood.create(rgb.rows, rgb.cols, CV_8UC2);
+  const BackgroundModel* bg = &background;
+  ClassificationStats stats;
+  classifyRows(&rgb, &bg, &likelihood, &stats, 1, num_threads);
+  return stats;
+}
+
+std::vector<ClassificationStats> PixelClassifier::classify(
+    const std::vector<cv::Mat>& rgb, const std::vector<const BackgroundModel*>& backgrounds,
+    std::vector<cv::Mat>& likelihoods, int num_threads) const {
+  if (rgb.size() != backgrounds.size())
+    throw std::invalid_argument("pixel classifier: " + std::to_string(rgb.size()) + " images but " +
+                                std::to_string(backgrounds.size()) + " background models");
+  for (std::size_t c = 0; c < rgb.size(); ++c) {
+    const std::string cam = "cam" + std::to_string(c);
+    if (!backgrounds[c]) throw std::invalid_argument(cam + ": no background model");
+    if (!backgrounds[c]->ready())
+      throw std::invalid_argument(cam + ": background model not learned yet (" +
+                                  std::to_string(backgrounds[c]->learnedFrames()) + " frames)");
+    checkRgb8(rgb[c], backgrounds[c]->width(), backgrounds[c]->height(), cam);
+  }
+  likelihoods.resize(rgb.size());
+  for (std::size_t c = 0; c < rgb.size(); ++c)
+    likelihoods[c].create(rgb[c].rows, rgb[c].cols, CV_8UC2);
+  std::vector<ClassificationStats> stats(rgb.size());
+  if (!rgb.empty())
+    classifyRows(rgb.data(), backgrounds.data(), likelihoods.data(), stats.data(), int(rgb.size()),
+                 num_threads);
+  return stats;
+}
+
+// ---- reference path --------------------------------------------------------------------------
+
+void PixelClassifier::classifyPixel(std::uint8_t R, std::uint8_t G, std::uint8_t B,
+                                    const BackgroundModel& background, int x, int y,
+                                    double* p_foreground, double* p_skin,
+                                    bool* suppressed_shadow) const {
+  const NormalizedRgI c = toNormalizedRgI(R, G, B);
+  const double PF = priors_.foreground, PS = priors_.skin;
+  const double pF = clampPrior(PF), pS = clampPrior(PS);
+  const double eF = params_.foreground_outlier, eS = params_.skin_outlier;
+  bool shadow = false;
+  double f, s;
+  if (c.intensity < params_.min_chroma_intensity) {
+    f = PF;
+    s = PS;
+  } else {
+    const double p_bg = background.density(x, y, c.r, c.g);
+    double p_fc = pF / (pF + p_bg * (1.0 - pF));
+    if (params_.shadow_suppression) {
+      const std::size_t i = std::size_t(y) * background.width() + x;
+      const BackgroundPlanes P = background.planes();
+      const double dr = c.r - P.mean_r[i], dg = c.g - P.mean_g[i];
+      const double mi = P.mean_intensity[i];
+      const double rad = params_.shadow_chroma_radius;
+      const bool inside = dr * dr + dg * dg < rad * rad &&
+                          c.intensity >= double(params_.shadow_min_intensity_ratio) * mi &&
+                          c.intensity <= double(params_.shadow_max_intensity_ratio) * mi;
+      shadow = inside && p_fc > 0.5;  // the cylinder changed the call
+      if (inside) p_fc = 0.0;
+    }
+    const double p_skin = skin_.density(c.r, c.g);
+    const double p_sc = p_skin * pS / (p_skin * pS + (1.0 - pS));
+    f = eF * PF + (1.0 - eF) * p_fc;
+    s = eS * PS + (1.0 - eS) * p_sc;
+  }
+  if (p_foreground) *p_foreground = f;
+  if (p_skin) *p_skin = s;
+  if (suppressed_shadow) *suppressed_shadow = shadow;
+}
+
+ClassificationStats PixelClassifier::classifyReference(const cv::Mat& rgb,
+                                                       const BackgroundModel& background,
+                                                       cv::Mat& likelihood) const {
+  if (!background.ready())
+    throw std::invalid_argument("pixel classifier: background model not learned yet");
+  checkRgb8(rgb, background.width(), background.height(), "pixel classifier (reference)");
+  likelihood.create(rgb.rows, rgb.cols, CV_8UC2);
+  ClassificationStats st;
+  st.pixels = rgb.rows * rgb.cols;
+  double sum = 0.0;
+  for (int y = 0; y < rgb.rows; ++y) {
+    const std::uint8_t* src = rgb.ptr<std::uint8_t>(y);
+    std::uint8_t* dst = likelihood.ptr<std::uint8_t>(y);
+    for (int x = 0; x < rgb.cols; ++x) {
+      const std::uint8_t R = src[3 * x], G = src[3 * x + 1], B = src[3 * x + 2];
+      double f, s;
+      bool shadow;
+      classifyPixel(R, G, B, background, x, y, &f, &s, &shadow);
+      dst[2 * x] = toByte(f);
+      dst[2 * x + 1] = toByte(f * s);
+      st.dark_pixels += toNormalizedRgI(R, G, B).intensity < params_.min_chroma_intensity;
+      st.saturated_pixels += (R == 255 || G == 255 || B == 255);
+      st.shadow_pixels += shadow;
+      sum += dst[2 * x];
+    }
+  }
+  st.mean_foreground = st.pixels ? sum / (255.0 * st.pixels) : 0.0;
+  return st;
+}
+
+}  // namespace psfs

@@ -1,0 +1,25 @@
+#include "psfs_reconstruction/probability_volume.h"
+
+#include <stdexcept>
+
+namespace psfs {
+
+size_t countAbove(const ProbabilityVolume& v, uint8_t t) {
+  size_t n = 0;
+  for (uint8_t b : v.data) n += b > t;
+  return n;
+}
+
+double volumeIoU(const ProbabilityVolume& a, uint8_t ta, const ProbabilityVolume& b, uint8_t tb) {
+  if (a.grid != b.grid || a.data.size() != b.data.size())
+    throw std::invalid_argument("psfs::volumeIoU: volumes on different grids");
+  size_t inter = 0, uni = 0;
+  for (size_t i = 0; i < a.data.size(); ++i) {
+    const bool x = a.data[i] > ta, y = b.data[i] > tb;
+    inter += x && y;
+    uni += x || y;
+  }
+  return uni == 0 ? 1.0 : double(inter) / double(uni);
+}
+
+}  // namespace psfs

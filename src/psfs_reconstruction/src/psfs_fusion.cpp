@@ -1,0 +1,110 @@
+#include "psfs_reconstruction/psfs_fusion.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cpu_dispatch.h"
+#include "fusion_common.h"
+#include "psfs_kernels.h"
+
+namespace psfs {
+namespace {
+
+constexpr int kExpTableSize = 4096;
+constexpr float kExpScale = 512.0f;  // bins per unit of ln p: < 0.2 % steps in p
+
+const std::vector<int32_t>& expTable() {
+  static const std::vector<int32_t> t = [] {
+    std::vector<int32_t> v(kExpTableSize);
+    for (int i = 0; i < kExpTableSize; ++i)
+      v[i] = static_cast<int32_t>(std::lround(255.0 * std::exp(-(i + 0.5) / kExpScale)));
+    v[0] = 255;  // ln p in (-1/512, 0]: p rounds to 1
+    return v;
+  }();
+  return t;
+}
+
+void checkProbability(double p, const char* name, bool allow_zero) {
+  if (!std::isfinite(p) || p < 0.0 || p > 1.0 || (!allow_zero && p == 0.0))
+    throw std::invalid_argument(std::string("psfs::PsfsOptions: ") + name + " must be in " +
+                                (allow_zero ? "[0, 1]" : "(0, 1]"));
+}
+
+}  // namespace
+
+double foregroundViewPrior(double hull_occupancy_foreground, int num_cameras) {
+  checkProbability(hull_occupancy_foreground, "hull_occupancy_foreground", false);
+  if (num_cameras < 1) throw std::invalid_argument("psfs::foregroundViewPrior: num_cameras < 1");
+  return std::pow(hull_occupancy_foreground, 1.0 / num_cameras);
+}
+
+double skinViewPrior(double hull_occupancy_skin, double hull_occupancy_foreground, int num_cameras) {
+  checkProbability(hull_occupancy_skin, "hull_occupancy_skin", false);
+  if (hull_occupancy_skin > hull_occupancy_foreground)
+    throw std::invalid_argument("psfs::skinViewPrior: skin hull occupancy exceeds the foreground's");
+  return std::pow(hull_occupancy_skin, 1.0 / num_cameras) /
+         foregroundViewPrior(hull_occupancy_foreground, num_cameras);
+}
+
+PsfsFusion::PsfsFusion(const PsfsOptions& o) : options_(o) {
+  if (!std::isfinite(o.threshold) || !(o.threshold > 0.5) || !(o.threshold < 1.0))
+    throw std::invalid_argument("psfs::PsfsOptions: threshold must be in (0.5, 1)");
+  checkProbability(o.hull_prior, "hull_prior", true);
+  checkProbability(o.view_prior, "view_prior", true);
+  if (o.occluded_views < 0 || o.occluded_views > detail::kMaxOccludedViews)
+    throw std::invalid_argument("psfs::PsfsOptions: occluded_views must be in 0..4");
+  if (!std::isfinite(o.drop_threshold) || o.drop_threshold < 0.0 || !(o.drop_threshold < 1.0))
+    throw std::invalid_argument("psfs::PsfsOptions: drop_threshold must be in [0, 1)");
+  if (o.min_views < 1) throw std::invalid_argument("psfs::PsfsOptions: min_views must be >= 1");
+  if (o.threads < 0) throw std::invalid_argument("psfs::PsfsOptions: threads must be >= 0");
+}
+
+void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence,
+                      ProbabilityVolume* out) const {
+  if (!out) throw std::invalid_argument("psfs::PsfsFusion::fuse: null output");
+  detail::checkInputs(table, evidence, options_.multi_projection, "psfs::PsfsFusion::fuse");
+  const int C = table.numCameras();
+  std::vector<detail::KernelView> views = detail::kernelViews(evidence);
+
+  detail::PsfsRowParams p;
+  p.nx = table.grid().dims.x();
+  p.nxp = table.paddedRowLength();
+  p.num_cameras = C;
+  p.chunks = table.chunksPerRow();
+  p.views = views.data();
+  const double td = options_.drop_threshold > 0.0 ? options_.drop_threshold : options_.threshold;
+  p.drop_below = static_cast<int32_t>(std::lround(ViewEvidence::kLogScale * std::log(td)));
+  p.min_views = options_.min_views;
+  p.offset = (options_.hull_prior > 0.0 && options_.view_prior > 0.0)
+                 ? static_cast<float>(std::log(options_.hull_prior) / C - std::log(options_.view_prior))
+                 : 0.0f;
+  p.log_t = static_cast<float>(std::log(options_.threshold));
+  p.exp_table = expTable().data();
+  p.exp_table_size = kExpTableSize;
+  p.exp_scale = kExpScale;
+  p.t_byte = thresholdByte(options_.threshold);
+  p.zero_outside = options_.zero_outside_hull;
+  const detail::PsfsRowFn row_fn =
+      detail::selectPsfsRow(options_.occluded_views, options_.multi_projection, vectorKernelsActive());
+
+  out->grid = table.grid();
+  out->data.resize(table.grid().numVoxels());
+  const long long rows = static_cast<long long>(table.grid().numRows());
+  const bool multi = options_.multi_projection;
+  uint8_t* dst = out->data.data();
+#pragma omp parallel num_threads(resolveThreads(options_.threads))
+  {
+    std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
+    std::vector<uint32_t> os(table.precomputed() || !multi ? 0 : table.offsetScratchSize());
+#pragma omp for schedule(dynamic, 8)
+    for (long long r = 0; r < rows; ++r) {
+      const uint32_t* centres = table.rowCentres(size_t(r), cs.data());
+      const uint32_t* offsets = multi ? table.rowOffsets(size_t(r), os.data()) : nullptr;
+      row_fn(p, centres, offsets, dst + size_t(r) * p.nx);
+    }
+  }
+}
+
+}  // namespace psfs

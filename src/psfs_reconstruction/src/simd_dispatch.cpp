@@ -1,0 +1,30 @@
+#include "psfs_reconstruction/simd_dispatch.h"
+
+#include <atomic>
+
+#include "cpu_dispatch.h"
+
+namespace psfs {
+namespace {
+std::atomic<bool> g_force_scalar{false};
+
+bool detectAvx2() {
+#if PSFS_HAVE_X86_DISPATCH
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  return false;
+#endif
+}
+}  // namespace
+
+bool avx2Available() {
+  static const bool available = detectAvx2();
+  return available;
+}
+
+void forceScalarKernels(bool force) { g_force_scalar.store(force); }
+
+bool vectorKernelsActive() { return avx2Available() && !g_force_scalar.load(std::memory_order_relaxed); }
+
+}  // namespace psfs

@@ -1,0 +1,117 @@
+#include "psfs_reconstruction/view_evidence.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "cpu_dispatch.h"
+#include "psfs_reconstruction/projection_table.h"
+
+namespace psfs {
+namespace {
+
+const std::array<int16_t, 256>& termTable() {
+  static const std::array<int16_t, 256> table = [] {
+    std::array<int16_t, 256> t{};
+    for (int b = 0; b < 256; ++b)
+      t[b] = static_cast<int16_t>(
+          std::lround(ViewEvidence::kLogScale * std::log(b == 0 ? 0.5 / 255.0 : b / 255.0)));
+    return t;
+  }();
+  return table;
+}
+
+[[noreturn]] void badView(size_t i, const std::string& why) {
+  throw std::invalid_argument("psfs::ViewEvidence: view " + std::to_string(i) + ": " + why);
+}
+
+}  // namespace
+
+int16_t ViewEvidence::logTerm(int byte) { return termTable()[std::clamp(byte, 0, 255)]; }
+
+void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int threads) {
+  if (views.empty()) throw std::invalid_argument("psfs::ViewEvidence: no views");
+  if (threads < 0) throw std::invalid_argument("psfs::ViewEvidence: threads < 0");
+  for (size_t i = 0; i < views.size(); ++i) {
+    const ViewImage& v = views[i];
+    if (v.likelihood.empty()) badView(i, "empty likelihood image");
+    if (v.likelihood.depth() != CV_8U) badView(i, "likelihood image must be 8-bit (CV_8U)");
+    if (v.channel < 0 || v.channel >= v.likelihood.channels())
+      badView(i, "channel " + std::to_string(v.channel) + " out of range (image has " +
+                     std::to_string(v.likelihood.channels()) + ")");
+    if (v.likelihood.dims != 2 || v.likelihood.cols > PackedUV::kMaxImageSide ||
+        v.likelihood.rows > PackedUV::kMaxImageSide)
+      badView(i, "image must be 2-D with sides <= " + std::to_string(PackedUV::kMaxImageSide));
+    if (!v.active.empty() && (v.active.type() != CV_8UC1 || v.active.size() != v.likelihood.size()))
+      badView(i, "active mask must be CV_8UC1 of the likelihood image's size");
+  }
+  bilinear_ = bilinear;
+  views_.resize(views.size());
+  const auto& lut = termTable();
+  const int n = static_cast<int>(views.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(resolveThreads(threads))
+  for (int i = 0; i < n; ++i) {
+    const ViewImage& in = views[i];
+    View& out = views_[i];
+    const int W = in.likelihood.cols, H = in.likelihood.rows, ch = in.likelihood.channels();
+    out.width = W;
+    out.height = H;
+    const size_t np = size_t(W) * H;
+    out.terms.resize(np + 3);
+    out.likelihood.resize(np + 4);
+    out.inactive_pixels = in.active.empty() ? 0 : np - static_cast<size_t>(cv::countNonZero(in.active));
+    for (int v = 0; v < H; ++v) {
+      const uint8_t* src = in.likelihood.ptr<uint8_t>(v) + in.channel;
+      const uint8_t* act = in.active.empty() ? nullptr : in.active.ptr<uint8_t>(v);
+      uint8_t* lk = &out.likelihood[size_t(v) * W];
+      int16_t* tm = &out.terms[size_t(v) * W];
+      if (ch == 1)
+        std::memcpy(lk, src, size_t(W));
+      else
+        for (int u = 0; u < W; ++u) lk[u] = src[size_t(u) * ch];
+      for (int u = 0; u < W; ++u) tm[u] = lut[lk[u]];
+      if (act)
+        for (int u = 0; u < W; ++u) tm[u] = act[u] == 0 ? kNoEvidence : tm[u];
+    }
+    std::fill(out.terms.begin() + np, out.terms.end(), kNoEvidence);
+    std::fill(out.likelihood.begin() + np, out.likelihood.end(), 0);
+    if (!bilinear) {
+      out.quads.clear();
+      continue;
+    }
+    // Quad (u, v) of the padded image holds L(u,v), L(u+1,v), L(u,v+1), L(u+1,v+1) with
+    // coordinates clamped to the image (replicated border), u, v from -kQuadPad.
+    const int QS = W + 2 * kQuadPad, QH = H + 2 * kQuadPad;
+    out.quads.resize(size_t(QS) * QH + 1);
+    std::vector<int> u0(QS), u1(QS);
+    for (int uu = 0; uu < QS; ++uu) {
+      u0[uu] = std::clamp(uu - kQuadPad, 0, W - 1);
+      u1[uu] = std::clamp(uu - kQuadPad + 1, 0, W - 1);
+    }
+    for (int vv = 0; vv < QH; ++vv) {
+      const uint8_t* r0 = &out.likelihood[size_t(std::clamp(vv - kQuadPad, 0, H - 1)) * W];
+      const uint8_t* r1 = &out.likelihood[size_t(std::clamp(vv - kQuadPad + 1, 0, H - 1)) * W];
+      uint32_t* q = &out.quads[size_t(vv) * QS];
+      // Border columns clamp; the interior is a straight sweep the compiler vectorises.
+      for (int uu = 0; uu < QS; ++uu) {
+        if (uu == kQuadPad && W >= 2) {
+          const int n = W - 1;  // interior: u = 0 .. W - 2 has its right neighbour in the image
+          uint32_t* qi = q + kQuadPad;
+          for (int u = 0; u < n; ++u)
+            qi[u] = uint32_t(r0[u]) | uint32_t(r0[u + 1]) << 8 | uint32_t(r1[u]) << 16 |
+                    uint32_t(r1[u + 1]) << 24;
+          uu += n - 1;
+          continue;
+        }
+        q[uu] = uint32_t(r0[u0[uu]]) | uint32_t(r0[u1[uu]]) << 8 | uint32_t(r1[u0[uu]]) << 16 |
+                uint32_t(r1[u1[uu]]) << 24;
+      }
+    }
+    out.quads.back() = 0;
+  }
+}
+
+}  // namespace psfs
