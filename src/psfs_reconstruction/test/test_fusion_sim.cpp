@@ -26,15 +26,7 @@ struct Truth {
 
 Truth oracleVolumes(const sim::Oracle& oracle, const VoxelGrid& g) {
   Truth t;
-  t.person.resize(g.numVoxels());
-  t.skin.resize(g.numVoxels());
-  const long long n = static_cast<long long>(g.numVoxels());
-#pragma omp parallel for schedule(dynamic, 4096)
-  for (long long i = 0; i < n; ++i) {
-    const Eigen::Vector3d p = g.centre(size_t(i));
-    t.person[i] = oracle.insidePerson(p);
-    t.skin[i] = oracle.insideSkin(p);
-  }
+  oracle.sampleGrid(g.origin, g.voxel_size, g.dims, &t.person, &t.skin);
   return t;
 }
 

@@ -369,9 +369,9 @@ TEST(PixelClassifier, RejectsBadInput) {
 }
 
 TEST(PixelClassifier, ShippedParameterFileMatchesDefaults) {
-  const std::string path = psfs_test::configDir() + "/pixel_classifier.yaml";
+  const std::string path = psfs_test::configDir() + "/psfs.yaml";
   if (psfs_test::configDir().empty() || !psfs_test::fileExists(path))
-    GTEST_SKIP() << "config/pixel_classifier.yaml not found (PSFS_RECONSTRUCTION_CONFIG_DIR)";
+    GTEST_SKIP() << "config/psfs.yaml not found (PSFS_RECONSTRUCTION_CONFIG_DIR)";
   const YAML::Node root = YAML::LoadFile(path);
   const YAML::Node c = root["pixel_classifier"], b = root["background_model"];
   ASSERT_TRUE(c && b);

@@ -1,5 +1,9 @@
 #include "tabletop_capture/sim/oracle.h"
 
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace tabletop_capture {
@@ -41,6 +45,37 @@ bool Oracle::insidePart(const Vector3d& p, BodyPart part) const {
   for (size_t i = 0; i < person_.size(); ++i)
     if (person_[i].part == part && person_[i].contains(p)) return true;
   return false;
+}
+
+void Oracle::sampleGrid(const Vector3d& origin, double voxel_size, const Eigen::Vector3i& dims,
+                        std::vector<uint8_t>* person, std::vector<uint8_t>* skin,
+                        int threads) const {
+  const size_t n = size_t(std::max(0, dims.x())) * size_t(std::max(0, dims.y())) *
+                   size_t(std::max(0, dims.z()));
+  if (person) person->assign(n, 0);
+  if (skin) skin->assign(n, 0);
+  if (n == 0 || person_.empty() || !(voxel_size > 0)) return;
+  // Voxel index range of the union of the bounding spheres.
+  Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const auto& s : spheres_) {
+    const double r = std::sqrt(s.w());
+    lo = lo.cwiseMin(s.head<3>() - Vector3d::Constant(r));
+    hi = hi.cwiseMax(s.head<3>() + Vector3d::Constant(r));
+  }
+  Eigen::Vector3i a, b;
+  for (int k = 0; k < 3; ++k) {
+    a[k] = std::max(0, static_cast<int>(std::floor((lo[k] - origin[k]) / voxel_size)));
+    b[k] = std::min(dims[k], static_cast<int>(std::ceil((hi[k] - origin[k]) / voxel_size)) + 1);
+  }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads > 0 ? threads : omp_get_max_threads())
+  for (int z = a.z(); z < b.z(); ++z)
+    for (int y = a.y(); y < b.y(); ++y)
+      for (int x = a.x(); x < b.x(); ++x) {
+        const Vector3d p = origin + voxel_size * Vector3d(x + 0.5, y + 0.5, z + 0.5);
+        const size_t i = size_t(x) + size_t(dims.x()) * (size_t(y) + size_t(dims.y()) * size_t(z));
+        if (person) (*person)[i] = insidePerson(p);
+        if (skin) (*skin)[i] = insideSkin(p);
+      }
 }
 
 Vector3d Oracle::handCentroid(Side side) const { return sim::handCentroid(person_, side); }

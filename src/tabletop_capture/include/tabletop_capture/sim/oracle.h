@@ -3,6 +3,7 @@
 // primitives the renderer draws, so truth and pictures agree.
 #pragma once
 
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -34,6 +35,14 @@ class Oracle {
   // the wrist): exactly the solid whose visible surface the renderer draws in skin colour.
   bool insideSkin(const Eigen::Vector3d& p) const;
   bool insidePart(const Eigen::Vector3d& p, BodyPart part) const;
+
+  // insidePerson / insideSkin at the voxel centres of a regular grid: origin = min corner,
+  // cubic voxels of voxel_size, dims voxels, index x fastest then y then z (the VoxelVolume
+  // layout). Each output (null = not wanted) gets one byte per voxel, 1 = inside. Voxels
+  // outside the person's bounding box are skipped, so a workspace grid costs a few ms.
+  // OpenMP over z-slices with `threads` (<= 0: OpenMP default).
+  void sampleGrid(const Eigen::Vector3d& origin, double voxel_size, const Eigen::Vector3i& dims,
+                  std::vector<uint8_t>* person, std::vector<uint8_t>* skin, int threads = 0) const;
 
   Eigen::Vector3d handCentroid(Side side) const;  // see body_model.h for the definition
   Eigen::Vector3d headCentroid() const { return head_; }

@@ -1,0 +1,173 @@
+// One frame set in, the pSfS volumes out: the whole per-frame pipeline of thesis chapter 4 as a
+// ROS-free object (the nodelet is a thin wrapper around it, tests drive it directly).
+//
+//   background learning (first learning_frames sets, or a loaded model)
+//   -> pixel classification (P'(F|c), P'(F,S|c) per camera, one pass)
+//   -> view evidence (log terms, bilinear quads) for the body and the skin class
+//   -> body volume and skin volume on the workspace grid (shared projection table)
+//   -> hand sub-volumes around requested ROIs (skin class, moving grids projected on the fly)
+//   -> selective background update with the foreground mask: the back-projection of the body
+//      volume, or masks the caller supplies (the body tracker, later).
+//
+// Bad input never corrupts the state: process() validates the whole frame set first and throws
+// std::invalid_argument naming the camera and the problem (count, encoding, size, calibration),
+// leaving the models as they were. A rig that changes on purpose (another camera count or image
+// size) resets the background models and relearns them; a calibration change only rebuilds the
+// projection tables. Cameras that deliver an (almost) all-dark image are switched off for the
+// frame and reported, so a covered lens degrades the volume instead of carving it.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "psfs_reconstruction/background_model.h"
+#include "psfs_reconstruction/gaussian_mixture.h"
+#include "psfs_reconstruction/pixel_classifier.h"
+#include "psfs_reconstruction/probability_volume.h"
+#include "psfs_reconstruction/projection_table.h"
+#include "psfs_reconstruction/psfs_fusion.h"
+#include "psfs_reconstruction/view_evidence.h"
+#include "psfs_reconstruction/voxel_grid.h"
+#include "tabletop_capture/camera_model.h"
+
+namespace psfs {
+
+struct ReconstructorParams {
+  PixelClassifierParams classifier;
+  BackgroundModelParams background;
+  // Volume of the body and skin volumes (DESIGN.md section 3 user space) and its resolution.
+  // 64x64x48 (15.6 mm) is the tracking resolution of the thesis; it needs the multi-projection
+  // test, which body/skin options switch on by default.
+  Workspace workspace;
+  Eigen::Vector3i dims{64, 64, 48};
+  // Expected occupancy of the workspace by the foreground hull P(H_F) and by the skin-coloured
+  // hull P(H) (fractions of the volume): they set the classifier's priors
+  // P(F) = P(H_F)^(1/C), P(S) = P(H)^(1/C) / P(F) (thesis 4.2.2). A seated person fills about
+  // 8 % of the 1 x 1 x 0.75 m box, face and hands about 0.5 %.
+  double hull_occupancy_foreground = 0.08;
+  double hull_occupancy_skin = 0.005;
+  // Fusion of the body volume (P'(F|c)), the skin volume and the hand sub-volumes (P'(F,S|c)).
+  // Skin tolerates one occluded view by default: a hand or the face is hidden from some camera
+  // in most frames (by the other hand, the head, the monitor), and an AND over views would
+  // erase it.
+  PsfsOptions body = defaultBody();
+  PsfsOptions skin = defaultSkin();
+  PsfsOptions hand = defaultHand();
+  // Hand sub-volumes: cubes of hand_roi_edge metres with hand_roi_voxels per side around each
+  // requested ROI centre, snapped to a world lattice (0.30 m / 83 = 3.6 mm voxels, thesis 4.3).
+  double hand_roi_edge = 0.30;
+  int hand_roi_voxels = 83;
+  // Selective background update after each reconstructed frame (alpha in `background`).
+  bool update_background = true;
+  // Extra pixels added around the back-projected body volume before it masks the update: the
+  // volume is coarse (a 16 mm voxel is ~3 px) and its edge must not leak the person into the
+  // background model.
+  int mask_margin_px = 2;
+  // A camera whose image has more than this fraction of too-dark pixels (see
+  // PixelClassifierParams::min_chroma_intensity) is switched off for the frame.
+  double dark_camera_fraction = 0.9;
+  // Saturated-pixel fraction above which a camera is reported as overexposed (it still counts).
+  double saturated_warning_fraction = 0.3;
+  int threads = 0;  // OpenMP threads for every stage (0 = OpenMP default)
+
+  static PsfsOptions defaultBody() {
+    PsfsOptions o;
+    o.multi_projection = true;
+    return o;
+  }
+  static PsfsOptions defaultSkin() {
+    PsfsOptions o;
+    o.multi_projection = true;
+    o.occluded_views = 1;
+    return o;
+  }
+  static PsfsOptions defaultHand() {
+    PsfsOptions o;
+    o.occluded_views = 1;
+    return o;
+  }
+  // Throws std::invalid_argument naming the field.
+  void validate() const;
+};
+
+struct StageTimes {  // wall time per stage of the last frame (ms)
+  double classify = 0, evidence = 0, body = 0, skin = 0, hands = 0, background = 0, total = 0;
+};
+
+struct FrameResult {
+  enum class Status {
+    kLearningBackground,  // the frame went into the background model; no volumes yet
+    kReconstructed,
+  };
+  Status status = Status::kLearningBackground;
+  int background_frames = 0;  // learned so far (== learning_frames once ready)
+  ProbabilityVolume body, skin;
+  std::vector<ProbabilityVolume> hands;  // one per requested ROI, same order
+  std::vector<ClassificationStats> stats;
+  std::vector<bool> camera_active;  // false = switched off this frame (dark)
+  StageTimes times;
+  // Things the caller should report (throttled): dark or overexposed cameras, rig changes.
+  std::vector<std::string> warnings;
+};
+
+class Reconstructor {
+ public:
+  // Throws std::invalid_argument for an empty skin model or invalid parameters.
+  Reconstructor(const GaussianMixture2D& skin_model, const ReconstructorParams& params);
+  ~Reconstructor();
+
+  const ReconstructorParams& params() const { return params_; }
+
+  // One frame set: rgb8 images in the cameras' order. hand_rois: centres (world, m) of the hand
+  // sub-volumes wanted this frame. foreground_masks: optional CV_8UC1 per camera (nonzero =
+  // foreground) for the background update instead of the volume's back-projection; empty or
+  // wrongly sized masks fall back to the back-projection.
+  // Throws std::invalid_argument (nothing changed) for an invalid frame set.
+  FrameResult process(const std::vector<cv::Mat>& rgb,
+                      const std::vector<tabletop_capture::CameraModel>& cameras,
+                      const std::vector<Eigen::Vector3d>& hand_rois = {},
+                      const std::vector<cv::Mat>& foreground_masks = {});
+
+  bool backgroundReady() const;
+  int numCameras() const { return static_cast<int>(cameras_.size()); }
+  // Drops the background models: the next frames are learned again.
+  void resetBackground();
+  // Saves each camera's model as <directory>/<camera name>.bgm. Throws std::runtime_error if
+  // the model is not ready or a file cannot be written.
+  void saveBackground(const std::string& directory) const;
+  // Loads <directory>/<name>.bgm for each camera; they are used once a frame set with these
+  // cameras (names and sizes) arrives. Throws std::runtime_error naming the file that is
+  // missing or invalid; then nothing is loaded and the background is learned as usual.
+  void loadBackground(const std::string& directory,
+                      const std::vector<tabletop_capture::CameraModel>& cameras);
+
+  // The back-projection of a volume into each camera (255 = some voxel above threshold_byte
+  // lands within the voxel's footprint + margin_px), using this reconstructor's cameras and the
+  // volume's own grid. What the background update uses when no masks are supplied.
+  std::vector<cv::Mat> backProject(const ProbabilityVolume& volume, uint8_t threshold_byte,
+                                   int margin_px) const;
+
+ private:
+  void validateFrame(const std::vector<cv::Mat>& rgb,
+                     const std::vector<tabletop_capture::CameraModel>& cameras) const;
+  void adoptRig(const std::vector<tabletop_capture::CameraModel>& cameras,
+                std::vector<std::string>* warnings);
+
+  ReconstructorParams params_;
+  PixelClassifier classifier_;
+  PsfsFusion body_fusion_, skin_fusion_, hand_fusion_;
+  std::vector<tabletop_capture::CameraModel> cameras_;
+  std::vector<BackgroundModel> backgrounds_;
+  std::vector<BackgroundModel> loaded_backgrounds_;  // waiting for their rig
+  std::vector<std::string> loaded_names_;
+  std::unique_ptr<ProjectionTable> table_;          // workspace grid (body and skin)
+  std::vector<std::unique_ptr<ProjectionTable>> hand_tables_;
+  std::vector<cv::Mat> likelihoods_;
+  ViewEvidence body_evidence_, skin_evidence_;
+};
+
+}  // namespace psfs

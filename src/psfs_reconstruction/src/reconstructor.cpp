@@ -1,0 +1,326 @@
+#include "psfs_reconstruction/reconstructor.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include <omp.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "psfs_reconstruction/image_checks.h"
+#include "tabletop_capture/rig_description.h"
+
+namespace psfs {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+bool sameCamera(const tabletop_capture::CameraModel& a, const tabletop_capture::CameraModel& b) {
+  return a.name == b.name && a.width == b.width && a.height == b.height && a.fx == b.fx &&
+         a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.distortion == b.distortion &&
+         a.world_T_camera.matrix() == b.world_T_camera.matrix();
+}
+
+std::string percent(double fraction) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.0f %%", 100.0 * fraction);
+  return buf;
+}
+
+}  // namespace
+
+void ReconstructorParams::validate() const {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("psfs::ReconstructorParams: " + what);
+  };
+  if (!(dims.minCoeff() >= 1)) fail("dims must be >= 1 along every axis");
+  workspaceGrid(workspace, dims).validate();
+  if (!(hull_occupancy_foreground > 0 && hull_occupancy_foreground < 1))
+    fail("hull_occupancy_foreground must lie in (0, 1)");
+  if (!(hull_occupancy_skin > 0 && hull_occupancy_skin <= hull_occupancy_foreground))
+    fail("hull_occupancy_skin must lie in (0, hull_occupancy_foreground]");
+  if (!(hand_roi_edge > 0 && std::isfinite(hand_roi_edge))) fail("hand_roi_edge must be > 0");
+  if (hand_roi_voxels < 2 || hand_roi_voxels > 512) fail("hand_roi_voxels must lie in [2, 512]");
+  if (mask_margin_px < 0 || mask_margin_px > 50) fail("mask_margin_px must lie in [0, 50]");
+  if (!(dark_camera_fraction > 0 && dark_camera_fraction <= 1))
+    fail("dark_camera_fraction must lie in (0, 1]");
+  if (!(saturated_warning_fraction > 0 && saturated_warning_fraction <= 1))
+    fail("saturated_warning_fraction must lie in (0, 1]");
+  if (threads < 0) fail("threads must be >= 0");
+}
+
+Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const ReconstructorParams& params)
+    : params_((params.validate(), params)),
+      classifier_(skin_model, params.classifier),
+      body_fusion_(params.body),
+      skin_fusion_(params.skin),
+      hand_fusion_(params.hand) {
+  // Background parameters are checked by constructing a model with them.
+  BackgroundModel probe(1, 1, params.background);
+  (void)probe;
+}
+
+Reconstructor::~Reconstructor() = default;
+
+bool Reconstructor::backgroundReady() const {
+  if (backgrounds_.empty()) return false;
+  for (const auto& b : backgrounds_)
+    if (!b.ready()) return false;
+  return true;
+}
+
+void Reconstructor::resetBackground() {
+  for (auto& b : backgrounds_) b = BackgroundModel(b.width(), b.height(), params_.background);
+}
+
+void Reconstructor::validateFrame(const std::vector<cv::Mat>& rgb,
+                                  const std::vector<tabletop_capture::CameraModel>& cameras) const {
+  if (cameras.empty()) throw std::invalid_argument("frame set has no cameras");
+  if (rgb.size() != cameras.size())
+    throw std::invalid_argument("frame set has " + std::to_string(rgb.size()) + " images but " +
+                                std::to_string(cameras.size()) + " cameras");
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const auto& cam = cameras[i];
+    const std::string name = cam.name.empty() ? "camera " + std::to_string(i) : cam.name;
+    try {
+      tabletop_capture::validateCamera(cam, "frame set", static_cast<int>(i));
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(name + ": invalid calibration: " + e.what());
+    }
+    if (!rgb[i].empty() && (rgb[i].cols != cam.width || rgb[i].rows != cam.height))
+      throw std::invalid_argument(name + ": image is " + std::to_string(rgb[i].cols) + "x" +
+                                  std::to_string(rgb[i].rows) + " but its calibration says " +
+                                  std::to_string(cam.width) + "x" + std::to_string(cam.height));
+    checkRgb8(rgb[i], cam.width, cam.height, name);
+  }
+}
+
+void Reconstructor::adoptRig(const std::vector<tabletop_capture::CameraModel>& cameras,
+                             std::vector<std::string>* warnings) {
+  bool layout_changed = cameras.size() != cameras_.size();
+  bool calibration_changed = layout_changed;
+  for (size_t i = 0; !layout_changed && i < cameras.size(); ++i) {
+    layout_changed = cameras[i].width != cameras_[i].width ||
+                     cameras[i].height != cameras_[i].height || cameras[i].name != cameras_[i].name;
+    calibration_changed = calibration_changed || !sameCamera(cameras[i], cameras_[i]);
+  }
+  if (layout_changed) {
+    if (!cameras_.empty())
+      warnings->push_back("the rig changed (" + std::to_string(cameras_.size()) + " -> " +
+                          std::to_string(cameras.size()) +
+                          " cameras, or other names/image sizes): relearning the background from "
+                          "the next " + std::to_string(params_.background.learning_frames) +
+                          " frame sets");
+    backgrounds_.clear();
+    for (const auto& c : cameras)
+      backgrounds_.emplace_back(c.width, c.height, params_.background);
+    // A model loaded from files is used if it was saved for exactly these cameras.
+    if (!loaded_backgrounds_.empty() && loaded_names_.size() == cameras.size()) {
+      bool match = true;
+      for (size_t i = 0; i < cameras.size(); ++i)
+        match = match && loaded_names_[i] == cameras[i].name &&
+                loaded_backgrounds_[i].width() == cameras[i].width &&
+                loaded_backgrounds_[i].height() == cameras[i].height;
+      if (match) {
+        backgrounds_ = loaded_backgrounds_;
+        for (auto& b : backgrounds_) b.setParams(params_.background);
+      } else {
+        warnings->push_back("the loaded background model was saved for other cameras: learning it");
+      }
+    }
+    classifier_.setPriors(ClassPriors::fromOccupancy(params_.hull_occupancy_foreground,
+                                                     params_.hull_occupancy_skin,
+                                                     static_cast<int>(cameras.size())));
+    likelihoods_.assign(cameras.size(), cv::Mat());
+  }
+  if (calibration_changed) {
+    cameras_ = cameras;
+    const VoxelGrid grid = workspaceGrid(params_.workspace, params_.dims);
+    ProjectionTableOptions o;
+    o.multi_projection = params_.body.multi_projection || params_.skin.multi_projection;
+    o.threads = params_.threads;
+    if (!table_)
+      table_ = std::make_unique<ProjectionTable>(grid, cameras_, o);
+    else
+      table_->update(grid, cameras_);
+  }
+}
+
+FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
+                                   const std::vector<tabletop_capture::CameraModel>& cameras,
+                                   const std::vector<Eigen::Vector3d>& hand_rois,
+                                   const std::vector<cv::Mat>& foreground_masks) {
+  const auto t_start = Clock::now();
+  validateFrame(rgb, cameras);
+  for (const auto& c : hand_rois)
+    if (!c.allFinite()) throw std::invalid_argument("hand ROI centre is not finite");
+
+  FrameResult r;
+  adoptRig(cameras, &r.warnings);
+  const int n = static_cast<int>(cameras_.size());
+
+  if (!backgroundReady()) {
+    const auto t0 = Clock::now();
+    for (int i = 0; i < n; ++i) backgrounds_[i].addLearningFrame(rgb[i]);
+    r.times.background = msSince(t0);
+    r.background_frames = backgrounds_[0].learnedFrames();
+    r.status = FrameResult::Status::kLearningBackground;
+    r.times.total = msSince(t_start);
+    return r;
+  }
+  r.status = FrameResult::Status::kReconstructed;
+  r.background_frames = backgrounds_[0].learnedFrames();
+
+  // --- classification
+  auto t0 = Clock::now();
+  std::vector<const BackgroundModel*> bg;
+  for (const auto& b : backgrounds_) bg.push_back(&b);
+  r.stats = classifier_.classify(rgb, bg, likelihoods_, params_.threads);
+  r.times.classify = msSince(t0);
+
+  // --- evidence (dark cameras switched off)
+  t0 = Clock::now();
+  r.camera_active.assign(n, true);
+  std::vector<ViewImage> body_views(n), skin_views(n);
+  for (int i = 0; i < n; ++i) {
+    const auto& s = r.stats[i];
+    if (s.darkFraction() > params_.dark_camera_fraction) {
+      r.camera_active[i] = false;
+      r.warnings.push_back(cameras_[i].name + ": " + percent(s.darkFraction()) +
+                           " of the image is too dark for colour (covered lens or camera off?): "
+                           "the view is left out of this frame");
+    } else if (s.saturatedFraction() > params_.saturated_warning_fraction) {
+      r.warnings.push_back(cameras_[i].name + ": " + percent(s.saturatedFraction()) +
+                           " of the pixels are saturated (overexposed): colours are unreliable");
+    }
+    body_views[i].likelihood = likelihoods_[i];
+    body_views[i].channel = 0;
+    skin_views[i].likelihood = likelihoods_[i];
+    skin_views[i].channel = 1;
+    if (!r.camera_active[i]) {
+      const cv::Mat off = cv::Mat::zeros(likelihoods_[i].size(), CV_8UC1);
+      body_views[i].active = off;
+      skin_views[i].active = off;
+    }
+  }
+  body_evidence_.set(body_views, params_.body.multi_projection, params_.threads);
+  skin_evidence_.set(skin_views, params_.skin.multi_projection, params_.threads);
+  r.times.evidence = msSince(t0);
+
+  // --- workspace volumes
+  t0 = Clock::now();
+  body_fusion_.fuse(*table_, body_evidence_, &r.body);
+  r.times.body = msSince(t0);
+  t0 = Clock::now();
+  skin_fusion_.fuse(*table_, skin_evidence_, &r.skin);
+  r.times.skin = msSince(t0);
+
+  // --- hand sub-volumes (grids move with the hands: projected on the fly)
+  t0 = Clock::now();
+  while (hand_tables_.size() < hand_rois.size()) hand_tables_.emplace_back();
+  r.hands.resize(hand_rois.size());
+  for (size_t h = 0; h < hand_rois.size(); ++h) {
+    const VoxelGrid grid =
+        snappedCubeGrid(hand_rois[h], params_.hand_roi_edge, params_.hand_roi_voxels);
+    if (!hand_tables_[h]) {
+      ProjectionTableOptions o;
+      o.storage = TableStorage::kOnTheFly;
+      o.threads = params_.threads;
+      hand_tables_[h] = std::make_unique<ProjectionTable>(grid, cameras_, o);
+    } else {
+      hand_tables_[h]->update(grid, cameras_);
+    }
+    hand_fusion_.fuse(*hand_tables_[h], skin_evidence_, &r.hands[h]);
+  }
+  r.times.hands = msSince(t0);
+
+  // --- selective background update
+  t0 = Clock::now();
+  if (params_.update_background) {
+    std::vector<cv::Mat> masks = backProject(r.body, thresholdByte(params_.body.threshold),
+                                             params_.mask_margin_px);
+    for (int i = 0; i < n; ++i) {
+      if (i < static_cast<int>(foreground_masks.size()) && !foreground_masks[i].empty() &&
+          foreground_masks[i].type() == CV_8UC1 && foreground_masks[i].size() == rgb[i].size())
+        masks[i] = foreground_masks[i];
+      // A switched-off camera shows no scene: learning from it would poison the model.
+      if (r.camera_active[i]) backgrounds_[i].update(rgb[i], masks[i], params_.threads);
+    }
+  }
+  r.times.background = msSince(t0);
+  r.times.total = msSince(t_start);
+  return r;
+}
+
+std::vector<cv::Mat> Reconstructor::backProject(const ProbabilityVolume& volume,
+                                                uint8_t threshold_byte, int margin_px) const {
+  const int n = static_cast<int>(cameras_.size());
+  std::vector<cv::Mat> masks(n);
+  for (int c = 0; c < n; ++c) masks[c] = cv::Mat::zeros(cameras_[c].height, cameras_[c].width, CV_8UC1);
+  if (n == 0 || volume.data.size() != volume.grid.numVoxels()) return masks;
+  const VoxelGrid& g = volume.grid;
+  const Eigen::Vector3d centre = g.origin + 0.5 * g.voxel_size * g.dims.cast<double>();
+  const bool use_table = table_ && table_->grid() == g && table_->precomputed();
+#pragma omp parallel for num_threads(params_.threads > 0 ? params_.threads : omp_get_max_threads()) \
+    schedule(static)
+  for (int c = 0; c < n; ++c) {
+    const auto& cam = cameras_[c];
+    cv::Mat& m = masks[c];
+    // Each voxel is drawn as its centre pixel, then the mask is dilated by the footprint of a
+    // voxel (half its diagonal) at the nearest distance of the grid to this camera, plus margin.
+    for (int z = 0; z < g.dims.z(); ++z)
+      for (int y = 0; y < g.dims.y(); ++y)
+        for (int x = 0; x < g.dims.x(); ++x) {
+          if (volume.data[g.index(x, y, z)] <= threshold_byte) continue;
+          if (use_table) {  // the stored projections: no lens model per voxel
+            const int p = PackedUV::pixelIndex(table_->centre(c, x, y, z), cam.width);
+            if (p < cam.width * cam.height) m.data[p] = 255;
+            continue;
+          }
+          Eigen::Vector2d px;
+          if (!cam.projectWorld(g.centre(x, y, z), &px)) continue;
+          const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
+          if (u >= 0 && v >= 0 && u < cam.width && v < cam.height) m.at<uint8_t>(v, u) = 255;
+        }
+    const double half_diag = 0.5 * std::sqrt(3.0) * g.voxel_size;
+    const double grid_radius = 0.5 * g.voxel_size * g.dims.cast<double>().norm();
+    const double nearest = std::max(0.1, (cam.center() - centre).norm() - grid_radius);
+    const int r = static_cast<int>(std::ceil(half_diag * std::max(cam.fx, cam.fy) / nearest)) + margin_px;
+    if (r > 0)
+      cv::dilate(m, m, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1)));
+  }
+  return masks;
+}
+
+void Reconstructor::saveBackground(const std::string& directory) const {
+  if (!backgroundReady())
+    throw std::runtime_error("background model is not learned yet: nothing to save");
+  for (size_t i = 0; i < backgrounds_.size(); ++i)
+    backgrounds_[i].save(directory + "/" + cameras_[i].name + ".bgm");
+}
+
+void Reconstructor::loadBackground(const std::string& directory,
+                                   const std::vector<tabletop_capture::CameraModel>& cameras) {
+  std::vector<BackgroundModel> models;
+  std::vector<std::string> names;
+  for (const auto& c : cameras) {
+    const std::string path = directory + "/" + c.name + ".bgm";
+    try {
+      models.push_back(BackgroundModel::load(path, c.width, c.height));
+    } catch (const std::exception& e) {
+      throw std::runtime_error("background model " + path + ": " + e.what());
+    }
+    names.push_back(c.name);
+  }
+  loaded_backgrounds_ = std::move(models);
+  loaded_names_ = std::move(names);
+  cameras_.clear();  // the next frame adopts the rig and, if it matches, the loaded models
+  backgrounds_.clear();
+}
+
+}  // namespace psfs

@@ -1,0 +1,379 @@
+// pSfS nodelet: frame sets (`frames`, MultiViewFrame) in, probabilistic volumes out.
+// A thin wrapper around psfs::Reconstructor: it converts the bundle to images and camera models
+// without copying the pixels (the images are read in place, inside the same nodelet manager the
+// bundle itself arrives zero-copy), collects hand ROIs from `hands/targets`, publishes
+//   psfs/body_volume, psfs/skin_volume   (tabletop_msgs/VoxelVolume, every reconstructed set)
+//   psfs/hand_volumes                    (tabletop_msgs/HandVolumes, when ROIs are requested)
+//   psfs/body_cloud, psfs/skin_cloud     (sensor_msgs/PointCloud2, only while subscribed)
+// and reports rate, per-stage times, learning progress, rejected sets and switched-off
+// cameras on /diagnostics.
+//
+// Private parameters:
+//   ~config_file          the YAML with every parameter   [$(find psfs_reconstruction)/config/psfs.yaml]
+//   ~threads              overrides nodelet/threads of the file (if set)
+//   ~background_load_dir  overrides nodelet/background_load_dir (if set)
+//   ~background_save_dir  overrides nodelet/background_save_dir (if set)
+//   ~world_frame          frame of the volumes                               [world]
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include <sys/stat.h>
+
+#include <boost/make_shared.hpp>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/package.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <tabletop_msgs/HandVolumes.h>
+#include <tabletop_msgs/MultiViewFrame.h>
+#include <tabletop_msgs/TrackedTargets.h>
+#include <tabletop_msgs/VoxelVolume.h>
+
+#include "psfs_reconstruction/reconstructor.h"
+#include "psfs_reconstruction/reconstructor_config.h"
+#include "psfs_reconstruction/ros/volume_msgs.h"
+#include "tabletop_capture/ros/conversions.h"
+#include "tabletop_capture/running_stats.h"
+
+namespace psfs {
+
+using tabletop_capture::RunningStats;
+
+class PsfsNodelet : public nodelet::Nodelet {
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    std::string config_file =
+        ros::package::getPath("psfs_reconstruction") + "/config/psfs.yaml";
+    pnh.param("config_file", config_file, config_file);
+    pnh.param("world_frame", world_frame_, std::string("world"));
+    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+    diag_->setHardwareID("psfs");
+    diag_->add("psfs reconstruction", this, &PsfsNodelet::diagnose);
+    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
+      diag_->force_update();
+    };
+    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    try {
+      cfg_ = loadReconstructorConfig(config_file);
+      if (pnh.hasParam("threads")) pnh.getParam("threads", cfg_.params.threads);
+      if (pnh.hasParam("background_load_dir"))
+        pnh.getParam("background_load_dir", cfg_.nodelet.background_load_dir);
+      if (pnh.hasParam("background_save_dir"))
+        pnh.getParam("background_save_dir", cfg_.nodelet.background_save_dir);
+      const GaussianMixture2D skin = GaussianMixture2D::load(cfg_.skin_model_path);
+      recon_ = std::make_unique<Reconstructor>(skin, cfg_.params);
+    } catch (const std::exception& e) {
+      fatal_ = e.what();
+      NODELET_FATAL("psfs: not started: %s", e.what());
+      return;
+    }
+    body_pub_ = nh.advertise<tabletop_msgs::VoxelVolume>("psfs/body_volume", 2);
+    skin_pub_ = nh.advertise<tabletop_msgs::VoxelVolume>("psfs/skin_volume", 2);
+    hands_pub_ = nh.advertise<tabletop_msgs::HandVolumes>("psfs/hand_volumes", 2);
+    body_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("psfs/body_cloud", 1);
+    skin_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("psfs/skin_cloud", 1);
+    roi_sub_ = nh.subscribe(cfg_.nodelet.hand_roi_topic, 5, &PsfsNodelet::onTargets, this);
+    frames_sub_ = nh.subscribe("frames", cfg_.nodelet.queue_size, &PsfsNodelet::onFrames, this);
+    NODELET_INFO("psfs: %s volumes from the frame sets on %s; config %s",
+                 workspaceGrid(cfg_.params.workspace, cfg_.params.dims).describe().c_str(),
+                 frames_sub_.getTopic().c_str(), config_file.c_str());
+  }
+
+  // ---- inputs ---------------------------------------------------------------------------
+  void onTargets(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(roi_mutex_);
+    targets_ = msg;
+  }
+
+  void onMask(size_t camera, const sensor_msgs::Image::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(roi_mutex_);
+    if (camera < masks_.size()) masks_[camera] = msg;
+  }
+
+  // Wraps the bundle's images (no pixel copy) and calibrations; false with the reason if the
+  // bundle breaks the MultiViewFrame contract.
+  bool unpack(const tabletop_msgs::MultiViewFrame& f, std::vector<cv::Mat>* rgb,
+              std::vector<tabletop_capture::CameraModel>* cams, std::string* why) const {
+    const size_t n = f.images.size();
+    if (n == 0 || f.camera_infos.size() != n || f.camera_poses.size() != n ||
+        f.camera_names.size() != n) {
+      *why = "inconsistent bundle (" + std::to_string(n) + " images, " +
+             std::to_string(f.camera_infos.size()) + " camera_infos, " +
+             std::to_string(f.camera_poses.size()) + " poses, " +
+             std::to_string(f.camera_names.size()) + " names)";
+      return false;
+    }
+    for (size_t i = 0; i < n; ++i) {
+      const auto& im = f.images[i];
+      const std::string& name = f.camera_names[i];
+      if (im.encoding != "rgb8") {
+        *why = name + ": encoding '" + im.encoding + "', expected rgb8";
+        return false;
+      }
+      if (im.width == 0 || im.height == 0 || im.step < 3 * im.width ||
+          im.data.size() < size_t(im.step) * im.height) {
+        *why = name + ": image buffer too small for " + std::to_string(im.width) + "x" +
+               std::to_string(im.height) + " rgb8";
+        return false;
+      }
+      tabletop_capture::CameraModel cam;
+      std::string reason;
+      if (!tabletop_capture::fromCameraInfo(f.camera_infos[i], &cam, &reason)) {
+        *why = name + ": invalid camera_info: " + reason;
+        return false;
+      }
+      if (!tabletop_capture::fromTransform(f.camera_poses[i], &cam.world_T_camera)) {
+        *why = name + ": camera pose is not finite or its quaternion is not unit";
+        return false;
+      }
+      cam.name = name;
+      cam.frame_id = f.camera_infos[i].header.frame_id;
+      cams->push_back(cam);
+      rgb->emplace_back(im.height, im.width, CV_8UC3, const_cast<uint8_t*>(im.data.data()),
+                        im.step);
+    }
+    return true;
+  }
+
+  std::vector<std::pair<uint32_t, Eigen::Vector3d>> currentRois(const ros::Time& stamp) {
+    std::vector<std::pair<uint32_t, Eigen::Vector3d>> rois;
+    std::lock_guard<std::mutex> lock(roi_mutex_);
+    if (!targets_ || std::abs((targets_->header.stamp - stamp).toSec()) > cfg_.nodelet.hand_roi_max_age)
+      return rois;
+    for (const auto& t : targets_->targets) {
+      if (!t.active || t.type != tabletop_msgs::TrackedTarget::HAND) continue;
+      const Eigen::Vector3d p(t.position.x, t.position.y, t.position.z);
+      if (!p.allFinite()) continue;
+      if (static_cast<int>(rois.size()) >= cfg_.nodelet.max_hand_rois) break;
+      rois.emplace_back(t.id, p);
+    }
+    return rois;
+  }
+
+  std::vector<cv::Mat> currentMasks(const tabletop_msgs::MultiViewFrame& f) {
+    std::vector<cv::Mat> out;
+    if (!cfg_.nodelet.foreground_mask_topics) return out;
+    std::lock_guard<std::mutex> lock(roi_mutex_);
+    if (mask_subs_.size() != f.camera_names.size()) {  // (re)subscribe for this rig
+      mask_subs_.clear();
+      masks_.assign(f.camera_names.size(), nullptr);
+      for (size_t i = 0; i < f.camera_names.size(); ++i) {
+        boost::function<void(const sensor_msgs::Image::ConstPtr&)> cb =
+            [this, i](const sensor_msgs::Image::ConstPtr& m) { onMask(i, m); };
+        mask_subs_.push_back(getNodeHandle().subscribe<sensor_msgs::Image>(
+            f.camera_names[i] + "/foreground_mask", 2, cb));
+      }
+    }
+    out.resize(masks_.size());
+    for (size_t i = 0; i < masks_.size(); ++i) {
+      const auto& m = masks_[i];
+      if (m && m->header.stamp == f.header.stamp && m->encoding == "mono8" &&
+          m->data.size() >= size_t(m->step) * m->height)
+        out[i] = cv::Mat(m->height, m->width, CV_8UC1, const_cast<uint8_t*>(m->data.data()), m->step);
+    }
+    return out;
+  }
+
+  // ---- per frame set --------------------------------------------------------------------
+  void onFrames(const tabletop_msgs::MultiViewFrame::ConstPtr& msg) {
+    const ros::WallTime t0 = ros::WallTime::now();
+    std::vector<cv::Mat> rgb;
+    std::vector<tabletop_capture::CameraModel> cams;
+    std::string why;
+    if (!unpack(*msg, &rgb, &cams, &why)) {
+      reject("frame set " + std::to_string(msg->header.stamp.toSec()) + " dropped: " + why);
+      return;
+    }
+    if (!load_tried_ && !cfg_.nodelet.background_load_dir.empty()) {
+      load_tried_ = true;
+      try {
+        recon_->loadBackground(cfg_.nodelet.background_load_dir, cams);
+        NODELET_INFO("psfs: background model loaded from %s",
+                     cfg_.nodelet.background_load_dir.c_str());
+      } catch (const std::exception& e) {
+        NODELET_ERROR("psfs: %s; learning the background from the next %d frame sets instead",
+                      e.what(), cfg_.params.background.learning_frames);
+      }
+    }
+    const auto rois = currentRois(msg->header.stamp);
+    std::vector<Eigen::Vector3d> centres;
+    for (const auto& r : rois) centres.push_back(r.second);
+    FrameResult r;
+    try {
+      r = recon_->process(rgb, cams, centres, currentMasks(*msg));
+    } catch (const std::exception& e) {
+      reject("frame set " + std::to_string(msg->header.stamp.toSec()) + " dropped: " + e.what());
+      return;
+    }
+    for (const auto& w : r.warnings) warnThrottled(w);
+
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++processed_;
+    learned_ = r.background_frames;
+    learning_ = r.status == FrameResult::Status::kLearningBackground;
+    if (learning_) {
+      if (r.background_frames == 1 || r.background_frames % 10 == 0)
+        NODELET_INFO("psfs: learning the background: %d/%d frame sets", r.background_frames,
+                     cfg_.params.background.learning_frames);
+      return;
+    }
+    if (!announced_ready_) {
+      announced_ready_ = true;
+      NODELET_INFO("psfs: background model ready (%d frame sets); reconstructing",
+                   r.background_frames);
+      saveBackground();
+    }
+    cameras_off_ = 0;
+    for (bool a : r.camera_active) cameras_off_ += !a;
+    publish(*msg, r);
+    const StageTimes& t = r.times;
+    classify_ms_.add(t.classify);
+    evidence_ms_.add(t.evidence);
+    body_ms_.add(t.body);
+    skin_ms_.add(t.skin);
+    hands_ms_.add(t.hands);
+    background_ms_.add(t.background);
+    total_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
+    ++reconstructed_;
+  }
+
+  void publish(const tabletop_msgs::MultiViewFrame& f, const FrameResult& r) {
+    const ros::Time stamp = f.header.stamp;
+    auto body = boost::make_shared<tabletop_msgs::VoxelVolume>();
+    toVoxelVolumeMsg(r.body, stamp, world_frame_, body.get());
+    body_pub_.publish(body);
+    auto skin = boost::make_shared<tabletop_msgs::VoxelVolume>();
+    toVoxelVolumeMsg(r.skin, stamp, world_frame_, skin.get());
+    skin_pub_.publish(skin);
+    if (!r.hands.empty()) {
+      auto hands = boost::make_shared<tabletop_msgs::HandVolumes>();
+      hands->header.stamp = stamp;
+      hands->header.frame_id = world_frame_;
+      const auto rois = currentRois(stamp);
+      for (size_t h = 0; h < r.hands.size(); ++h) {
+        hands->target_ids.push_back(h < rois.size() ? rois[h].first : 0);
+        hands->volumes.emplace_back();
+        toVoxelVolumeMsg(r.hands[h], stamp, world_frame_, &hands->volumes.back());
+      }
+      hands_pub_.publish(hands);
+    }
+    if (cfg_.nodelet.publish_clouds && body_cloud_pub_.getNumSubscribers() > 0) {
+      auto c = boost::make_shared<sensor_msgs::PointCloud2>();
+      toCloudMsg(r.body, thresholdByte(cfg_.params.body.threshold), stamp, world_frame_, c.get());
+      body_cloud_pub_.publish(c);
+    }
+    if (cfg_.nodelet.publish_clouds && skin_cloud_pub_.getNumSubscribers() > 0) {
+      auto c = boost::make_shared<sensor_msgs::PointCloud2>();
+      toCloudMsg(r.skin, thresholdByte(cfg_.params.skin.threshold), stamp, world_frame_, c.get());
+      skin_cloud_pub_.publish(c);
+    }
+  }
+
+  void saveBackground() {
+    const std::string& dir = cfg_.nodelet.background_save_dir;
+    if (dir.empty()) return;
+    try {
+      ::mkdir(dir.c_str(), 0755);
+      recon_->saveBackground(dir);
+      NODELET_INFO("psfs: background model saved to %s", dir.c_str());
+    } catch (const std::exception& e) {
+      NODELET_ERROR("psfs: could not save the background model: %s", e.what());
+    }
+  }
+
+  void reject(const std::string& what) {
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++rejected_;
+      last_error_ = what;
+    }
+    NODELET_ERROR_THROTTLE(5.0, "psfs: %s", what.c_str());
+  }
+
+  // One line per distinct message every 5 s (the throttle macros would merge them all).
+  void warnThrottled(const std::string& w) {
+    const ros::WallTime now = ros::WallTime::now();
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++warnings_;
+    auto it = warned_.find(w);
+    if (it != warned_.end() && (now - it->second).toSec() < 5.0) return;
+    warned_[w] = now;
+    if (warned_.size() > 256) warned_.clear();
+    NODELET_WARN("psfs: %s", w.c_str());
+  }
+
+  // ---- diagnostics ----------------------------------------------------------------------
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    if (!fatal_.empty()) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: " + fatal_);
+      return;
+    }
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    const ros::WallTime now = ros::WallTime::now();
+    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
+    const double rate = dt > 0 ? (reconstructed_ - reconstructed_at_last_) / dt : 0.0;
+    if (processed_ == 0)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for frame sets");
+    else if (learning_)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::OK,
+                   "learning the background (" + std::to_string(learned_) + "/" +
+                       std::to_string(cfg_.params.background.learning_frames) + ")");
+    else if (rejected_ > rejected_at_last_)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting frame sets: " + last_error_);
+    else if (warnings_ > warnings_at_last_ || cameras_off_ > 0)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "degraded input (see the log)");
+    else
+      stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "ok");
+    stat.add("rate (Hz)", rate);
+    stat.add("frame sets reconstructed", reconstructed_);
+    stat.add("frame sets rejected", rejected_);
+    stat.add("cameras switched off", cameras_off_);
+    stat.add("classify (ms)", classify_ms_.mean());
+    stat.add("evidence (ms)", evidence_ms_.mean());
+    stat.add("body fusion (ms)", body_ms_.mean());
+    stat.add("skin fusion (ms)", skin_ms_.mean());
+    stat.add("hand volumes (ms)", hands_ms_.mean());
+    stat.add("background update (ms)", background_ms_.mean());
+    stat.add("total (ms)", total_ms_.mean());
+    stat.add("total max (ms)", total_ms_.max());
+    stat.add("volume", workspaceGrid(cfg_.params.workspace, cfg_.params.dims).describe());
+    last_diag_ = now;
+    reconstructed_at_last_ = reconstructed_;
+    rejected_at_last_ = rejected_;
+    warnings_at_last_ = warnings_;
+  }
+
+  ReconstructorConfig cfg_;
+  std::unique_ptr<Reconstructor> recon_;
+  std::string world_frame_, fatal_;
+  ros::Subscriber frames_sub_, roi_sub_;
+  std::vector<ros::Subscriber> mask_subs_;
+  ros::Publisher body_pub_, skin_pub_, hands_pub_, body_cloud_pub_, skin_cloud_pub_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer diag_timer_;
+
+  std::mutex roi_mutex_;
+  tabletop_msgs::TrackedTargets::ConstPtr targets_;
+  std::vector<sensor_msgs::Image::ConstPtr> masks_;
+
+  std::mutex stats_mutex_;
+  bool load_tried_ = false, announced_ready_ = false, learning_ = true;
+  int learned_ = 0, cameras_off_ = 0;
+  uint64_t processed_ = 0, reconstructed_ = 0, rejected_ = 0, warnings_ = 0;
+  uint64_t reconstructed_at_last_ = 0, rejected_at_last_ = 0, warnings_at_last_ = 0;
+  std::string last_error_;
+  std::map<std::string, ros::WallTime> warned_;
+  ros::WallTime last_diag_;
+  // Per-stage times over the whole run (the demo's summary reads the means).
+  RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
+};
+
+}  // namespace psfs
+
+PLUGINLIB_EXPORT_CLASS(psfs::PsfsNodelet, nodelet::Nodelet)
