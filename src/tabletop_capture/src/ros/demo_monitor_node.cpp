@@ -1,6 +1,9 @@
 // Demo monitor: watches the pipeline on /tabletop, prints a live status line, and when the run
 // ends writes a contact sheet of the camera views (with the ground truth projected) and a
-// summary (frames, rate, end-to-end latency, per-stage times from /diagnostics).
+// summary (frames, rate, end-to-end latency, per-stage times from /diagnostics). When the pSfS
+// stage runs it also scores psfs/body_volume and psfs/skin_volume against the simulated rig's
+// oracle volumes (ground_truth/*_volume, same stamps) and writes volumes.png: the latest
+// reconstruction beside the truth as top, front and side projections.
 //
 // Parameters (private):
 //   ~frames        frame sets to wait for before finishing (0 = until Ctrl-C)       [0]
@@ -10,6 +13,7 @@
 //   ~sheet_columns views per row of the contact sheet                               [4]
 //   ~live_status_line  overwrite one status line (terminal) instead of a line every 5 s
 //                      [stdout is a tty]
+//   ~volume_threshold  a voxel is "in the volume" above this probability (the fusion's t)  [0.75]
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -28,6 +32,7 @@
 
 #include <tabletop_msgs/MultiViewFrame.h>
 #include <tabletop_msgs/TrackedTargets.h>
+#include <tabletop_msgs/VoxelVolume.h>
 
 #include "tabletop_capture/ros/conversions.h"
 #include "tabletop_capture/running_stats.h"
@@ -45,6 +50,19 @@ class DemoMonitor {
     // One self-overwriting status line on a terminal, a line every 5 s in logs. roslaunch
     // pipes our stdout, so the caller says which via ~live_status_line.
     pnh_.param("live_status_line", tty_, static_cast<bool>(isatty(fileno(stdout))));
+    double t = 0.75;
+    pnh_.param("volume_threshold", t, t);
+    threshold_byte_ = static_cast<uint8_t>(std::max(0.0, std::min(255.0, std::floor(255.0 * t))));
+    for (int k = 0; k < 2; ++k) {
+      const std::string kind = k == 0 ? "body" : "skin";
+      boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_rec =
+          [this, k](const tabletop_msgs::VoxelVolume::ConstPtr& m) { onVolume(k, false, m); };
+      boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_truth =
+          [this, k](const tabletop_msgs::VoxelVolume::ConstPtr& m) { onVolume(k, true, m); };
+      volume_subs_.push_back(nh_.subscribe<tabletop_msgs::VoxelVolume>("psfs/" + kind + "_volume", 8, on_rec));
+      volume_subs_.push_back(
+          nh_.subscribe<tabletop_msgs::VoxelVolume>("ground_truth/" + kind + "_volume", 8, on_truth));
+    }
     frames_sub_ = nh_.subscribe("frames", 4, &DemoMonitor::onFrame, this);
     truth_sub_ = nh_.subscribe("ground_truth/targets", 50, &DemoMonitor::onTruth, this);
     diag_sub_ = nh_.subscribe("/diagnostics", 50, &DemoMonitor::onDiagnostics, this);
@@ -82,6 +100,37 @@ class DemoMonitor {
       truth_.erase(truth_.begin());
       truth_msgs_.erase(truth_msgs_.begin());
     }
+  }
+
+  // Pairs reconstruction and truth by stamp (either may arrive first) and scores the pair.
+  void onVolume(int kind, bool truth, const tabletop_msgs::VoxelVolume::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto& mine = truth ? truth_volumes_[kind] : recon_volumes_[kind];
+    auto& other = truth ? recon_volumes_[kind] : truth_volumes_[kind];
+    if (!truth) ++volumes_received_[kind];
+    auto it = other.find(msg->header.stamp);
+    if (it == other.end()) {
+      mine[msg->header.stamp] = msg;
+      while (mine.size() > 60) mine.erase(mine.begin());
+      return;
+    }
+    const auto rec = truth ? it->second : msg;
+    const auto tru = truth ? msg : it->second;
+    other.erase(it);
+    if (rec->size_x != tru->size_x || rec->size_y != tru->size_y || rec->size_z != tru->size_z ||
+        std::abs(rec->voxel_size - tru->voxel_size) > 1e-9 || rec->data.size() != tru->data.size()) {
+      grid_mismatch_ = true;
+      return;
+    }
+    size_t both = 0, either = 0;
+    for (size_t i = 0; i < rec->data.size(); ++i) {
+      const bool a = rec->data[i] > threshold_byte_, b = tru->data[i] > 127;
+      both += a && b;
+      either += a || b;
+    }
+    if (either == 0) return;  // empty scene: nothing to score
+    iou_[kind].add(double(both) / either);
+    scored_[kind] = {rec, tru};
   }
 
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
@@ -156,7 +205,9 @@ class DemoMonitor {
       for (const auto& kv : st.second) {
         if (kv.first.find("(ms)") == std::string::npos && kv.first.find("(Hz)") == std::string::npos &&
             kv.first.find("dropped") == std::string::npos && kv.first.find("late") == std::string::npos &&
-            kv.first.find("incomplete") == std::string::npos)
+            kv.first.find("incomplete") == std::string::npos &&
+            kv.first.find("rejected") == std::string::npos &&
+            kv.first.find("switched off") == std::string::npos)
           continue;
         std::string v = kv.second;
         try {
@@ -173,6 +224,25 @@ class DemoMonitor {
       }
       if (!fields.empty()) s << "  " << st.first << ":" << fields << "\n";
     }
+    for (int k = 0; k < 2; ++k) {
+      const char* kind = k == 0 ? "body" : "skin";
+      if (iou_[k].count() > 0) {
+        std::snprintf(buf, sizeof(buf),
+                      "%s volume IoU        mean %.3f, min %.3f over %llu frames (vs the oracle, "
+                      "p > %.2f)\n",
+                      kind, iou_[k].mean(), iou_[k].min(),
+                      static_cast<unsigned long long>(iou_[k].count()), threshold_byte_ / 255.0);
+        s << buf;
+      } else if (volumes_received_[k] > 0) {
+        s << kind << " volumes          " << volumes_received_[k]
+          << (grid_mismatch_ ? " (not scored: grid differs from the oracle's)\n"
+                             : " (not scored: no oracle volumes; simulated rig only)\n");
+      }
+    }
+    if (scored_[0].first) {
+      const std::string path = output_dir_ + "/volumes.png";
+      if (writeVolumeImage(path)) s << "volume image          " << path << "\n";
+    }
     if (sheet_) {
       const std::string path = output_dir_ + "/contact_sheet.png";
       if (writeContactSheet(*sheet_, path))
@@ -186,6 +256,73 @@ class DemoMonitor {
   }
 
  private:
+  // Max projections of a volume along one axis (0 = x, 1 = y, 2 = z) into a BGR panel, `scale`
+  // pixels per voxel, world z up: body voxels grey, skin voxels orange on top.
+  cv::Mat projection(const tabletop_msgs::VoxelVolume& body, const tabletop_msgs::VoxelVolume* skin,
+                     int axis, uint8_t body_t, uint8_t skin_t, int scale) const {
+    const int n[3] = {int(body.size_x), int(body.size_y), int(body.size_z)};
+    const int u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
+    cv::Mat panel(n[v_axis] * scale, n[u_axis] * scale, CV_8UC3, cv::Scalar(30, 30, 30));
+    auto index = [&](int x, int y, int z) { return size_t(x) + size_t(n[0]) * (size_t(y) + size_t(n[1]) * z); };
+    for (int v = 0; v < n[v_axis]; ++v)
+      for (int u = 0; u < n[u_axis]; ++u) {
+        int depth_body = 0, depth_skin = 0;
+        for (int w = 0; w < n[axis]; ++w) {
+          int c[3];
+          c[axis] = w;
+          c[u_axis] = u;
+          c[v_axis] = v;
+          const size_t i = index(c[0], c[1], c[2]);
+          depth_body += body.data[i] > body_t;
+          if (skin && skin->data.size() == body.data.size()) depth_skin += skin->data[i] > skin_t;
+        }
+        cv::Scalar colour;
+        if (depth_skin > 0)
+          colour = cv::Scalar(60, 140, 255);
+        else if (depth_body > 0)
+          colour = cv::Scalar::all(std::min(255, 110 + 8 * depth_body));
+        else
+          continue;
+        // Image rows go down; world z (or y in the top view) goes up.
+        const int row = (n[v_axis] - 1 - v) * scale;
+        cv::rectangle(panel, cv::Rect(u * scale, row, scale, scale), colour, cv::FILLED);
+      }
+    return panel;
+  }
+
+  bool writeVolumeImage(const std::string& path) const {
+    const int scale = 4;
+    std::vector<cv::Mat> rows;
+    for (int truth = 0; truth < 2; ++truth) {
+      const auto& body = truth ? scored_[0].second : scored_[0].first;
+      const tabletop_msgs::VoxelVolume* skin = nullptr;
+      if (scored_[1].first && scored_[1].first->header.stamp == body->header.stamp)
+        skin = (truth ? scored_[1].second : scored_[1].first).get();
+      const uint8_t bt = truth ? 127 : threshold_byte_;
+      std::vector<cv::Mat> panels = {projection(*body, skin, 2, bt, bt, scale),
+                                     projection(*body, skin, 1, bt, bt, scale),
+                                     projection(*body, skin, 0, bt, bt, scale)};
+      int h = 0, w = 0;
+      for (const auto& p : panels) {
+        h = std::max(h, p.rows);
+        w += p.cols + 8;
+      }
+      cv::Mat row(h + 22, w + 8, CV_8UC3, cv::Scalar(0, 0, 0));
+      int x = 8;
+      const char* names[3] = {"top (x right, y up)", "front (x right, z up)", "side (y right, z up)"};
+      for (int i = 0; i < 3; ++i) {
+        panels[i].copyTo(row(cv::Rect(x, 22, panels[i].cols, panels[i].rows)));
+        cv::putText(row, std::string(truth ? "oracle: " : "pSfS: ") + names[i], cv::Point(x, 16),
+                    cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+        x += panels[i].cols + 8;
+      }
+      rows.push_back(row);
+    }
+    cv::Mat out;
+    cv::vconcat(rows, out);
+    return cv::imwrite(path, out);
+  }
+
   bool writeContactSheet(const tabletop_msgs::MultiViewFrame& f, const std::string& path) {
     const size_t n = f.images.size();
     if (n == 0) return false;
@@ -246,6 +383,14 @@ class DemoMonitor {
   std::map<ros::Time, bool> truth_;
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> truth_msgs_;
   std::map<std::string, std::map<std::string, std::string>> stages_;
+  // [0] body, [1] skin: unpaired volumes by stamp, IoU so far, the last scored pair.
+  std::vector<ros::Subscriber> volume_subs_;
+  uint8_t threshold_byte_ = 191;
+  std::map<ros::Time, tabletop_msgs::VoxelVolume::ConstPtr> recon_volumes_[2], truth_volumes_[2];
+  RunningStats iou_[2];
+  uint64_t volumes_received_[2] = {0, 0};
+  bool grid_mismatch_ = false;
+  std::pair<tabletop_msgs::VoxelVolume::ConstPtr, tabletop_msgs::VoxelVolume::ConstPtr> scored_[2];
 };
 
 }  // namespace tabletop_capture

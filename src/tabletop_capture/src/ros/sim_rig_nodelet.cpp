@@ -1,10 +1,14 @@
 // Simulated rig nodelet: renders the scripted scene and publishes exactly the camera-input
 // contract of DESIGN.md section 3 (cam<i>/image_raw, cam<i>/camera_info, static tf), plus
-// ground_truth/targets and ground_truth/body_pose. All rendering lives in sim::SimulatedRig.
+// ground_truth/targets and ground_truth/body_pose, and (every ~truth_volume_every frames) the
+// oracle's occupancy as ground_truth/body_volume and ground_truth/skin_volume for evaluating
+// the reconstruction. All rendering lives in sim::SimulatedRig.
 #include <atomic>
 #include <memory>
 #include <mutex>
 #include <thread>
+
+#include <boost/make_shared.hpp>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -54,6 +58,14 @@ class SimRigNodelet : public nodelet::Nodelet {
     pnh.param("max_frames", max_frames_, 0);
     pnh.param("start_delay", start_delay_, 1.0);
     pnh.param("realtime", realtime_, true);
+    // Oracle volumes: every N-th frame (0 = never), on the workspace box at these dims.
+    pnh.param("truth_volume_every", truth_every_, 0);
+    std::vector<int> dims{64, 64, 48};
+    pnh.param("truth_volume_dims", dims, dims);
+    if (dims.size() == 3 && dims[0] > 0 && dims[1] > 0 && dims[2] > 0)
+      truth_dims_ = Eigen::Vector3i(dims[0], dims[1], dims[2]);
+    else
+      NODELET_ERROR("simulated rig: truth_volume_dims must be 3 positive integers; using 64 64 48");
 
     try {
       if (rig_file.empty()) {
@@ -82,6 +94,10 @@ class SimRigNodelet : public nodelet::Nodelet {
     static_tf_.sendTransform(tfs);
     targets_pub_ = nh.advertise<tabletop_msgs::TrackedTargets>("ground_truth/targets", 10);
     body_pub_ = nh.advertise<tabletop_msgs::BodyPose>("ground_truth/body_pose", 10);
+    if (truth_every_ > 0) {
+      truth_body_pub_ = nh.advertise<tabletop_msgs::VoxelVolume>("ground_truth/body_volume", 4);
+      truth_skin_pub_ = nh.advertise<tabletop_msgs::VoxelVolume>("ground_truth/skin_volume", 4);
+    }
     world_frame_ = rig.world_frame;
 
     diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
@@ -147,6 +163,15 @@ class SimRigNodelet : public nodelet::Nodelet {
     }
     targets_pub_.publish(toTargetsMsg(f.truth, stamp, world_frame_));
     body_pub_.publish(toBodyPoseMsg(f.truth, stamp, world_frame_));
+    if (truth_every_ > 0 && f.index % truth_every_ == 0) {
+      auto body = boost::make_shared<tabletop_msgs::VoxelVolume>();
+      auto skin = boost::make_shared<tabletop_msgs::VoxelVolume>();
+      const auto& o = sim_->options();
+      toTruthVolumeMsgs(sim_->oracle(f.index), o.workspace_min, o.workspace_size, truth_dims_,
+                        stamp, world_frame_, body.get(), skin.get());
+      truth_body_pub_.publish(body);
+      truth_skin_pub_.publish(skin);
+    }
   }
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -175,7 +200,9 @@ class SimRigNodelet : public nodelet::Nodelet {
   std::unique_ptr<sim::SimulatedRig> sim_;
   std::vector<ros::Publisher> image_pubs_, info_pubs_;
   std::vector<sensor_msgs::CameraInfo> infos_;
-  ros::Publisher targets_pub_, body_pub_;
+  ros::Publisher targets_pub_, body_pub_, truth_body_pub_, truth_skin_pub_;
+  int truth_every_ = 0;
+  Eigen::Vector3i truth_dims_{64, 64, 48};
   tf2_ros::StaticTransformBroadcaster static_tf_;
   std::unique_ptr<diagnostic_updater::Updater> diag_;
   ros::WallTimer diag_timer_;

@@ -48,4 +48,29 @@ tabletop_msgs::BodyPose toBodyPoseMsg(const sim::GroundTruth& gt, const ros::Tim
   return msg;
 }
 
+void toTruthVolumeMsgs(const sim::Oracle& oracle, const Eigen::Vector3d& workspace_min,
+                       const Eigen::Vector3d& workspace_size, const Eigen::Vector3i& dims,
+                       const ros::Time& stamp, const std::string& frame_id,
+                       tabletop_msgs::VoxelVolume* body, tabletop_msgs::VoxelVolume* skin) {
+  const double voxel = (workspace_size.array() / dims.cast<double>().array()).minCoeff();
+  const Eigen::Vector3d origin =
+      workspace_min + 0.5 * (workspace_size - voxel * dims.cast<double>());
+  std::vector<uint8_t> person, skin_occ;
+  oracle.sampleGrid(origin, voxel, dims, &person, &skin_occ);
+  for (const auto& pair : {std::make_pair(body, &person), std::make_pair(skin, &skin_occ)}) {
+    tabletop_msgs::VoxelVolume* m = pair.first;
+    m->header.stamp = stamp;
+    m->header.frame_id = frame_id;
+    m->origin.x = origin.x();
+    m->origin.y = origin.y();
+    m->origin.z = origin.z();
+    m->voxel_size = voxel;
+    m->size_x = dims.x();
+    m->size_y = dims.y();
+    m->size_z = dims.z();
+    m->data.resize(pair.second->size());
+    for (size_t i = 0; i < m->data.size(); ++i) m->data[i] = (*pair.second)[i] ? 255 : 0;
+  }
+}
+
 }  // namespace tabletop_capture

@@ -5,6 +5,7 @@
 
 #include <tabletop_msgs/BodyPose.h>
 #include <tabletop_msgs/TrackedTargets.h>
+#include <tabletop_msgs/VoxelVolume.h>
 
 #include "tabletop_capture/sim/simulated_rig.h"
 
@@ -16,5 +17,14 @@ tabletop_msgs::TrackedTargets toTargetsMsg(const sim::GroundTruth& truth, const 
                                            const std::string& frame_id);
 tabletop_msgs::BodyPose toBodyPoseMsg(const sim::GroundTruth& truth, const ros::Time& stamp,
                                       const std::string& frame_id);
+
+// The oracle's occupancy on a workspace grid as VoxelVolumes (ground_truth/body_volume,
+// ground_truth/skin_volume; 255 = inside, 0 = outside). The grid follows the pSfS rule: cubic
+// voxels of the smallest workspace_size / dims edge, centred in the box along the other axes,
+// so the truth lies on the same voxels as psfs/body_volume for the same box and dims.
+void toTruthVolumeMsgs(const sim::Oracle& oracle, const Eigen::Vector3d& workspace_min,
+                       const Eigen::Vector3d& workspace_size, const Eigen::Vector3i& dims,
+                       const ros::Time& stamp, const std::string& frame_id,
+                       tabletop_msgs::VoxelVolume* body, tabletop_msgs::VoxelVolume* skin);
 
 }  // namespace tabletop_capture
