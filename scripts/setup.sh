@@ -3,9 +3,15 @@
 #  - installs the Debian packages below if any is missing (needs root; apt only, no rosdep);
 #  - builds the catkin workspace (this repository) in Release with Debian's python3.
 # Idempotent: with everything installed and nothing changed it takes a few seconds.
-# Usage: scripts/setup.sh [extra catkin_make args]
+# Usage: scripts/setup.sh [--bench] [extra catkin_make args]
+#   --bench  also install the peer libraries of the benchmarks (Open3D, for bench_carving)
 set -eo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BENCH_PACKAGES=()
+if [ "${1:-}" = "--bench" ]; then
+  BENCH_PACKAGES=(libopen3d-dev)
+  shift
+fi
 
 # Exact Debian packages (bookworm). ROS 1 comes from Debian's archive.
 PACKAGES=(
@@ -19,7 +25,7 @@ PACKAGES=(
 )
 
 missing=()
-for p in "${PACKAGES[@]}"; do
+for p in "${PACKAGES[@]}" "${BENCH_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -gt 0 ]; then
