@@ -266,6 +266,10 @@ std::vector<cv::Mat> Reconstructor::backProject(const ProbabilityVolume& volume,
   const VoxelGrid& g = volume.grid;
   const Eigen::Vector3d centre = g.origin + 0.5 * g.voxel_size * g.dims.cast<double>();
   const bool use_table = table_ && table_->grid() == g && table_->precomputed();
+  // The occupied voxels once (a few percent of the grid), then each camera draws only those.
+  std::vector<Eigen::Vector3i> occupied;
+  for (size_t i = 0; i < volume.data.size(); ++i)
+    if (volume.data[i] > threshold_byte) occupied.push_back(g.coords(i));
 #pragma omp parallel for num_threads(params_.threads > 0 ? params_.threads : omp_get_max_threads()) \
     schedule(static)
   for (int c = 0; c < n; ++c) {
@@ -273,20 +277,18 @@ std::vector<cv::Mat> Reconstructor::backProject(const ProbabilityVolume& volume,
     cv::Mat& m = masks[c];
     // Each voxel is drawn as its centre pixel, then the mask is dilated by the footprint of a
     // voxel (half its diagonal) at the nearest distance of the grid to this camera, plus margin.
-    for (int z = 0; z < g.dims.z(); ++z)
-      for (int y = 0; y < g.dims.y(); ++y)
-        for (int x = 0; x < g.dims.x(); ++x) {
-          if (volume.data[g.index(x, y, z)] <= threshold_byte) continue;
-          if (use_table) {  // the stored projections: no lens model per voxel
-            const int p = PackedUV::pixelIndex(table_->centre(c, x, y, z), cam.width);
-            if (p < cam.width * cam.height) m.data[p] = 255;
-            continue;
-          }
-          Eigen::Vector2d px;
-          if (!cam.projectWorld(g.centre(x, y, z), &px)) continue;
-          const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
-          if (u >= 0 && v >= 0 && u < cam.width && v < cam.height) m.at<uint8_t>(v, u) = 255;
-        }
+    for (const Eigen::Vector3i& o : occupied) {
+      const int x = o.x(), y = o.y(), z = o.z();
+      if (use_table) {  // the stored projections: no lens model per voxel
+        const int p = PackedUV::pixelIndex(table_->centre(c, x, y, z), cam.width);
+        if (p < cam.width * cam.height) m.data[p] = 255;
+        continue;
+      }
+      Eigen::Vector2d px;
+      if (!cam.projectWorld(g.centre(x, y, z), &px)) continue;
+      const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
+      if (u >= 0 && v >= 0 && u < cam.width && v < cam.height) m.at<uint8_t>(v, u) = 255;
+    }
     const double half_diag = 0.5 * std::sqrt(3.0) * g.voxel_size;
     const double grid_radius = 0.5 * g.voxel_size * g.dims.cast<double>().norm();
     const double nearest = std::max(0.1, (cam.center() - centre).norm() - grid_radius);

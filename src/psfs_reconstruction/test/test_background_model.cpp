@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "expect_throw.h"
+
 #include "psfs_reconstruction/background_model.h"
 #include "synthetic_scene.h"
 
@@ -38,16 +40,7 @@ bool samePlanes(const cv::Mat& a, const cv::Mat& b) {
          std::memcmp(a.data, b.data, a.total() * a.elemSize()) == 0;
 }
 
-template <typename F>
-void expectThrowContaining(F&& f, const std::string& needle) {
-  try {
-    f();
-    ADD_FAILURE() << "expected an exception mentioning '" << needle << "'";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
-        << "message '" << e.what() << "' lacks '" << needle << "'";
-  }
-}
+using psfs_test::expectThrowContaining;
 
 }  // namespace
 

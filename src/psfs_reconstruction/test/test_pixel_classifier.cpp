@@ -5,6 +5,8 @@
 #include <random>
 
 #include <gtest/gtest.h>
+
+#include "expect_throw.h"
 #include <yaml-cpp/yaml.h>
 
 #include "psfs_reconstruction/background_model.h"
@@ -59,16 +61,7 @@ std::pair<double, double> at(const cv::Mat& lik, int x, int y) {
   return {v[0] / 255.0, v[1] / 255.0};
 }
 
-template <typename F>
-void expectThrowContaining(F&& f, const std::string& needle) {
-  try {
-    f();
-    ADD_FAILURE() << "expected an exception mentioning '" << needle << "'";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
-        << "message '" << e.what() << "' lacks '" << needle << "'";
-  }
-}
+using psfs_test::expectThrowContaining;
 
 }  // namespace
 

@@ -16,6 +16,7 @@
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/reconstructor_config.h"
 #include "tabletop_capture/sim/simulated_rig.h"
+#include "expect_throw.h"
 #include "test_data_path.h"
 
 namespace psfs {
@@ -183,12 +184,8 @@ TEST_F(ReconstructorTest, BadFrameSetsAreRejectedAndTheStateSurvives) {
   auto expectRejected = [&](const std::vector<cv::Mat>& images,
                             const std::vector<tabletop_capture::CameraModel>& cams,
                             const std::string& fragment) {
-    try {
-      r.process(images, cams);
-      ADD_FAILURE() << "expected a rejection mentioning '" << fragment << "'";
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-    }
+    psfs_test::expectThrowContaining<std::invalid_argument>([&] { r.process(images, cams); },
+                                                           fragment);
   };
   // NaN calibration.
   auto cams = cameras();
@@ -257,12 +254,8 @@ TEST_F(ReconstructorTest, SavedBackgroundReloadsToTheSameVolumes) {
 
   Reconstructor b(skin(), params_);
   // A missing model is a clear error naming the file; nothing is loaded.
-  try {
-    b.loadBackground((dir / "nowhere").string(), cameras());
-    ADD_FAILURE() << "expected an error for a missing background model";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("nowhere/cam0.bgm"), std::string::npos) << e.what();
-  }
+  psfs_test::expectThrowContaining<std::runtime_error>(
+      [&] { b.loadBackground((dir / "nowhere").string(), cameras()); }, "nowhere/cam0.bgm");
   b.loadBackground(dir.string(), cameras());
   const int f = kLearn + 20;
   const auto images = rig_->render(f).images;
@@ -374,14 +367,10 @@ TEST(ReconstructorConfig, BadFilesNameTheFileAndTheKey) {
   const std::string path = (fs::temp_directory_path() / ("psfs_cfg_" + std::to_string(::getpid()) + ".yaml")).string();
   auto expectError = [&](const std::string& text, const std::string& fragment) {
     std::ofstream(path) << text;
-    try {
-      loadReconstructorConfig(path);
-      ADD_FAILURE() << "accepted: " << text;
-    } catch (const std::runtime_error& e) {
-      const std::string m = e.what();
-      EXPECT_NE(m.find(path), std::string::npos) << m;
-      EXPECT_NE(m.find(fragment), std::string::npos) << m;
-    }
+    psfs_test::expectThrowContaining<std::runtime_error>([&] { loadReconstructorConfig(path); },
+                                                        path + ": ");
+    psfs_test::expectThrowContaining<std::runtime_error>([&] { loadReconstructorConfig(path); },
+                                                        fragment);
   };
   expectError("volume: {dims: [64, 64]}", "volume/dims");
   expectError("fusion: {body: {treshold: 0.7}}", "fusion/body/treshold: unknown key");
@@ -393,12 +382,7 @@ TEST(ReconstructorConfig, BadFilesNameTheFileAndTheKey) {
   std::ofstream(path) << "volume: {dims: [128, 128, 96]}\n";
   EXPECT_EQ(loadReconstructorConfig(path).params.dims, Eigen::Vector3i(128, 128, 96));
   fs::remove(path);
-  try {
-    loadReconstructorConfig(path);
-    ADD_FAILURE() << "a missing file was accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
-  }
+  psfs_test::expectThrowContaining<std::runtime_error>([&] { loadReconstructorConfig(path); }, path);
 }
 
 }  // namespace
