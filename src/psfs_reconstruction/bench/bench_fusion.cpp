@@ -60,7 +60,7 @@ void BM_Evidence(benchmark::State& st) {
     ev.set(w.views, bil, static_cast<int>(st.range(1)));
     benchmark::DoNotOptimize(ev.terms(0));
   }
-  st.SetLabel(bil ? "8 views, terms + quads" : "8 views, terms");
+  st.SetLabel(bil ? "8 views, terms + pairs" : "8 views, terms");
 }
 BENCHMARK(BM_Evidence)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"bilinear", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
 

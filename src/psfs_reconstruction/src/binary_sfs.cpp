@@ -60,6 +60,9 @@ void BinarySfs::carve(const ProjectionTable& table, ProbabilityVolume* out) cons
 #pragma omp for schedule(dynamic, 8)
     for (long long r = 0; r < rows; ++r) {
       const uint32_t* centres = table.rowCentres(size_t(r), scratch.data());
+      // Same cache policy as the pSfS kernel: the table streams past without evicting the
+      // silhouette codes (a 128x128x96 table is larger than the last-level cache).
+      for (int i = 0; i < C * nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
       uint8_t* o = dst + size_t(r) * nx;
       for (int x = 0; x < nx; ++x) {
         int seen = 0;

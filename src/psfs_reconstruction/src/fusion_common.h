@@ -36,7 +36,7 @@ inline void checkInputs(const ProjectionTable& table, const ViewEvidence& eviden
 inline std::vector<KernelView> kernelViews(const ViewEvidence& e) {
   std::vector<KernelView> v(e.numViews());
   for (int c = 0; c < e.numViews(); ++c)
-    v[c] = KernelView{e.terms(c), e.bilinear() ? e.quads(c) : nullptr, e.width(c), e.quadStride(c),
+    v[c] = KernelView{e.terms(c), e.bilinear() ? e.pairs(c) : nullptr, e.width(c), e.quadStride(c),
                       e.hasInactivePixels(c), PackedUV::notObserved(e.height(c))};
   return v;
 }

@@ -28,11 +28,11 @@ inline int pixelOf(uint32_t uv, int width) { return PackedUV::pixelIndex(uv, wid
 // the same integer arithmetic as maddubs + madd in the AVX2 kernel. Result in [0, 255 * 256].
 inline int32_t bilinear(const KernelView& v, int32_t su, int32_t sv) {
   const int32_t u0 = su >> 4, fu = su & 15, v0 = sv >> 4, fv = sv & 15;
-  const uint32_t q = v.quads[v0 * v.quad_stride + u0];
-  const int32_t a = q & 255, b = (q >> 8) & 255, c = (q >> 16) & 255, d = q >> 24;
-  const int32_t top = a * (16 - fu) + b * fu;
-  const int32_t bot = c * (16 - fu) + d * fu;
-  return top * (16 - fv) + bot * fv;
+  const uint16_t* q = v.pairs + v0 * v.quad_stride + u0;
+  const int32_t a = q[0] & 255, c = q[0] >> 8, b = q[1] & 255, d = q[1] >> 8;
+  const int32_t left = a * (16 - fv) + c * fv;
+  const int32_t right = b * (16 - fv) + d * fv;
+  return left * (16 - fu) + right * fu;  // = top (16 - fv) + bottom fv, the same integer
 }
 
 inline void cswap(int32_t& a, int32_t& b) {
@@ -151,15 +151,16 @@ PSFS_AVX2 __m256i bilinearAvx2(const KernelView& v, __m256i su, __m256i sv) {
   const __m256i u0 = _mm256_srli_epi32(su, 4), fu = _mm256_and_si256(su, _mm256_set1_epi32(15));
   const __m256i v0 = _mm256_srli_epi32(sv, 4), fv = _mm256_and_si256(sv, _mm256_set1_epi32(15));
   const __m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(v0, _mm256_set1_epi32(v.quad_stride)), u0);
-  const __m256i q = _mm256_i32gather_epi32(reinterpret_cast<const int*>(v.quads), idx, 4);
-  // bytes (16 - fu, fu, 16 - fu, fu): one maddubs gives the top and bottom row lerps...
-  const __m256i wu = _mm256_add_epi32(_mm256_mullo_epi32(fu, _mm256_set1_epi32(0x00FF00FF)),
+  // Two pairs: bytes (a, c, b, d) = (top left, bottom left, top right, bottom right).
+  const __m256i q = _mm256_i32gather_epi32(reinterpret_cast<const int*>(v.pairs), idx, 2);
+  // bytes (16 - fv, fv, 16 - fv, fv): one maddubs gives the left and right column lerps...
+  const __m256i wv = _mm256_add_epi32(_mm256_mullo_epi32(fv, _mm256_set1_epi32(0x00FF00FF)),
                                       _mm256_set1_epi32(0x00100010));
-  const __m256i tb = _mm256_maddubs_epi16(q, wu);
-  // ...and one madd with int16 (16 - fv, fv) the vertical lerp.
-  const __m256i wv = _mm256_add_epi32(_mm256_sub_epi32(_mm256_slli_epi32(fv, 16), fv),
+  const __m256i lr = _mm256_maddubs_epi16(q, wv);
+  // ...and one madd with int16 (16 - fu, fu) the horizontal lerp.
+  const __m256i wu = _mm256_add_epi32(_mm256_sub_epi32(_mm256_slli_epi32(fu, 16), fu),
                                       _mm256_set1_epi32(16));
-  return _mm256_madd_epi16(tb, wv);
+  return _mm256_madd_epi16(lr, wu);
 }
 
 PSFS_AVX2 void cswapAvx2(__m256i& a, __m256i& b) {
@@ -212,6 +213,10 @@ __attribute__((target("avx2,fma"))) void rowAvx2(const PsfsRowParams& p, const u
   const __m256i zero = _mm256_setzero_si256();
   const __m256i no_ev = _mm256_set1_epi32(kNoEv);
   const __m256i lo16 = _mm256_set1_epi32(0xFFFF);
+  // The row's projections are read once per frame: fetch them without letting them push the
+  // evidence images (gathered every frame) out of the caches.
+  for (int i = 0; i < p.num_cameras * p.nxp; i += 16)
+    _mm_prefetch(reinterpret_cast<const char*>(centres + i), _MM_HINT_NTA);
   for (int x0 = 0; x0 < p.nx; x0 += 8) {
     __m256i sum = zero, inactive = zero;
     __m256i m[K > 0 ? K : 1];

@@ -9,7 +9,7 @@ namespace detail {
 
 struct KernelView {
   const int16_t* terms;    // ViewEvidence::terms
-  const uint32_t* quads;   // ViewEvidence::quads (multi-projection only)
+  const uint16_t* pairs;   // ViewEvidence::pairs (multi-projection only)
   int width;
   int quad_stride;
   bool has_mask;           // some pixel switched off (else only unobserved voxels lack evidence)

@@ -79,38 +79,24 @@ void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int t
     std::fill(out.terms.begin() + np, out.terms.end(), kNoEvidence);
     std::fill(out.likelihood.begin() + np, out.likelihood.end(), 0);
     if (!bilinear) {
-      out.quads.clear();
+      out.pairs.clear();
       continue;
     }
-    // Quad (u, v) of the padded image holds L(u,v), L(u+1,v), L(u,v+1), L(u+1,v+1) with
-    // coordinates clamped to the image (replicated border), u, v from -kQuadPad.
+    // Pair (u, v) of the padded image holds L(u, v) and L(u, v + 1) with coordinates clamped to
+    // the image (replicated border), u, v from -kQuadPad.
     const int QS = W + 2 * kQuadPad, QH = H + 2 * kQuadPad;
-    out.quads.resize(size_t(QS) * QH + 1);
-    std::vector<int> u0(QS), u1(QS);
-    for (int uu = 0; uu < QS; ++uu) {
-      u0[uu] = std::clamp(uu - kQuadPad, 0, W - 1);
-      u1[uu] = std::clamp(uu - kQuadPad + 1, 0, W - 1);
-    }
+    out.pairs.resize(size_t(QS) * QH + 2);
     for (int vv = 0; vv < QH; ++vv) {
       const uint8_t* r0 = &out.likelihood[size_t(std::clamp(vv - kQuadPad, 0, H - 1)) * W];
       const uint8_t* r1 = &out.likelihood[size_t(std::clamp(vv - kQuadPad + 1, 0, H - 1)) * W];
-      uint32_t* q = &out.quads[size_t(vv) * QS];
-      // Border columns clamp; the interior is a straight sweep the compiler vectorises.
-      for (int uu = 0; uu < QS; ++uu) {
-        if (uu == kQuadPad && W >= 2) {
-          const int n = W - 1;  // interior: u = 0 .. W - 2 has its right neighbour in the image
-          uint32_t* qi = q + kQuadPad;
-          for (int u = 0; u < n; ++u)
-            qi[u] = uint32_t(r0[u]) | uint32_t(r0[u + 1]) << 8 | uint32_t(r1[u]) << 16 |
-                    uint32_t(r1[u + 1]) << 24;
-          uu += n - 1;
-          continue;
-        }
-        q[uu] = uint32_t(r0[u0[uu]]) | uint32_t(r0[u1[uu]]) << 8 | uint32_t(r1[u0[uu]]) << 16 |
-                uint32_t(r1[u1[uu]]) << 24;
-      }
+      uint16_t* q = &out.pairs[size_t(vv) * QS];
+      const uint16_t left = uint16_t(r0[0] | r1[0] << 8);
+      const uint16_t right = uint16_t(r0[W - 1] | r1[W - 1] << 8);
+      for (int uu = 0; uu < kQuadPad; ++uu) q[uu] = left, q[QS - 1 - uu] = right;
+      uint16_t* qi = q + kQuadPad;
+      for (int u = 0; u < W; ++u) qi[u] = uint16_t(r0[u] | r1[u] << 8);  // vectorised
     }
-    out.quads.back() = 0;
+    out.pairs[size_t(QS) * QH] = out.pairs[size_t(QS) * QH + 1] = 0;
   }
 }
 

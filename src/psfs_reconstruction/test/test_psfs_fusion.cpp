@@ -194,10 +194,10 @@ TEST(ProjectionTable, LensModelRangeIsLimited) {
   EXPECT_EQ(wrong, 0u);
 }
 
-TEST(ViewEvidence, TermsMasksAndQuads) {
+TEST(ViewEvidence, TermsMasksAndPairs) {
   // Odd sizes (incl. 1-pixel-wide) and a two-channel image: the terms are the log table of
-  // the selected channel, switched-off pixels and the guard say "no evidence", and every quad
-  // holds the 2x2 neighbourhood with the border replicated.
+  // the selected channel, switched-off pixels and the guard say "no evidence", and every pair
+  // holds a pixel and the one below it with the border replicated.
   for (const cv::Size size : {cv::Size(37, 23), cv::Size(1, 5), cv::Size(6, 1)}) {
     cv::Mat img(size, CV_8UC2);
     cv::randu(img, 0, 256);
@@ -224,10 +224,8 @@ TEST(ViewEvidence, TermsMasksAndQuads) {
       }
     for (int y = -P; y < H + P; ++y)
       for (int x = -P; x < W + P; ++x) {
-        const uint32_t q = ev.quads(0)[(y + P) * ev.quadStride(0) + (x + P)];
-        ASSERT_EQ(q, uint32_t(L(x, y)) | uint32_t(L(x + 1, y)) << 8 | uint32_t(L(x, y + 1)) << 16 |
-                         uint32_t(L(x + 1, y + 1)) << 24)
-            << size << " at " << x << ", " << y;
+        const uint16_t q = ev.pairs(0)[(y + P) * ev.quadStride(0) + (x + P)];
+        ASSERT_EQ(q, uint16_t(L(x, y) | L(x, y + 1) << 8)) << size << " at " << x << ", " << y;
       }
   }
   EXPECT_EQ(ViewEvidence::logTerm(255), 0);

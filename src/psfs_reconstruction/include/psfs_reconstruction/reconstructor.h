@@ -3,7 +3,7 @@
 //
 //   background learning (first learning_frames sets, or a loaded model)
 //   -> pixel classification (P'(F|c), P'(F,S|c) per camera, one pass)
-//   -> view evidence (log terms, bilinear quads) for the body and the skin class
+//   -> view evidence (log terms, bilinear pairs) for the body and the skin class
 //   -> body volume and skin volume on the workspace grid (shared projection table)
 //   -> hand sub-volumes around requested ROIs (skin class, moving grids projected on the fly)
 //   -> selective background update with the foreground mask: the back-projection of the body

@@ -7,9 +7,11 @@
 //    voxels point at the guard (PackedUV), so the single-projection loop is one gather and a few
 //    adds per voxel and camera. The log turns the product over cameras into a sum; doing it per
 //    pixel (77k per camera) instead of per voxel and camera (1.6M at 128x128x96) saves a lookup.
-//  * quads (multi-projection only): per pixel the 2x2 neighbourhood packed in 32 bits, with a
-//    replicated border, so a bilinear sample is one 32-bit gather plus two multiply-adds (what
-//    the thesis got from the GPU's texture unit).
+//  * pairs (multi-projection only): per pixel its byte and the byte below it, 16 bits, with a
+//    replicated border. One 32-bit load at pixel (u, v) reads two neighbouring pairs, i.e. the
+//    whole 2x2 neighbourhood, so a bilinear sample is one 32-bit gather plus two multiply-adds
+//    (what the thesis got from the GPU's texture unit). Two bytes per pixel rather than a
+//    packed 2x2 quad per pixel keeps the 8 views' images (1.4 MB) near the core's L2.
 //  * likelihood: the plain bytes, for the reference variants (all-classes, binary SfS).
 #pragma once
 
@@ -35,7 +37,7 @@ class ViewEvidence {
  public:
   static constexpr int kLogScale = 1024;   // fixed-point scale of the log terms
   static constexpr int16_t kNoEvidence = 1;  // term of a switched-off pixel and of the guard
-  static constexpr int kQuadPad = 8;       // replicated border of the quad images (pixels)
+  static constexpr int kQuadPad = 8;       // replicated border of the pair images (pixels)
 
   // Validates and converts one frame set (one image per camera, in the cameras' order).
   // bilinear: also build the quad images (needed by the multi-projection test).
@@ -52,7 +54,9 @@ class ViewEvidence {
   // are readable 4 bytes past it (gathers load 32 bits).
   const int16_t* terms(int v) const { return views_[v].terms.data(); }
   const uint8_t* likelihood(int v) const { return views_[v].likelihood.data(); }
-  const uint32_t* quads(int v) const { return views_[v].quads.data(); }
+  // pairs[(v + kQuadPad) * quadStride + u + kQuadPad] = L(u, v) | L(u, v + 1) << 8, with u, v
+  // clamped to the image; readable one entry past the end.
+  const uint16_t* pairs(int v) const { return views_[v].pairs.data(); }
   int quadStride(int v) const { return views_[v].width + 2 * kQuadPad; }
   // True if some pixel of view v is switched off by its active mask.
   bool hasInactivePixels(int v) const { return views_[v].inactive_pixels > 0; }
@@ -69,7 +73,7 @@ class ViewEvidence {
     size_t inactive_pixels = 0;
     std::vector<int16_t> terms;
     std::vector<uint8_t> likelihood;
-    std::vector<uint32_t> quads;
+    std::vector<uint16_t> pairs;
   };
   std::vector<View> views_;
   bool bilinear_ = false;
