@@ -3,7 +3,10 @@
 // summary (frames, rate, end-to-end latency, per-stage times from /diagnostics). When the pSfS
 // stage runs it also scores psfs/body_volume and psfs/skin_volume against the simulated rig's
 // oracle volumes (ground_truth/*_volume, same stamps) and writes volumes.png: the latest
-// reconstruction beside the truth as top, front and side projections.
+// reconstruction beside the truth as top, front and side projections. When a hand tracker
+// publishes hands/targets, its targets are scored against ground_truth/targets (same stamps)
+// with sim::TrackingEvaluator: errors, losses, identity switches in the summary and
+// tracking_error.png.
 //
 // Parameters (private):
 //   ~frames        frame sets to wait for before finishing (0 = until Ctrl-C)       [0]
@@ -35,7 +38,9 @@
 #include <tabletop_msgs/VoxelVolume.h>
 
 #include "tabletop_capture/ros/conversions.h"
+#include "tabletop_capture/ros/sim_truth_msgs.h"
 #include "tabletop_capture/running_stats.h"
+#include "tabletop_capture/sim/tracking_evaluator.h"
 
 namespace tabletop_capture {
 
@@ -65,6 +70,7 @@ class DemoMonitor {
     }
     frames_sub_ = nh_.subscribe("frames", 4, &DemoMonitor::onFrame, this);
     truth_sub_ = nh_.subscribe("ground_truth/targets", 50, &DemoMonitor::onTruth, this);
+    tracked_sub_ = nh_.subscribe("hands/targets", 50, &DemoMonitor::onTracked, this);
     diag_sub_ = nh_.subscribe("/diagnostics", 50, &DemoMonitor::onDiagnostics, this);
     timer_ = nh_.createWallTimer(ros::WallDuration(0.5), &DemoMonitor::onTimer, this);
     start_ = ros::WallTime::now();
@@ -90,6 +96,22 @@ class DemoMonitor {
     }
   }
 
+  // Tracker output and truth are paired by stamp, whichever arrives first.
+  void onTracked(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    tracked_[msg->header.stamp] = msg;
+    while (tracked_.size() > 100) tracked_.erase(tracked_.begin());
+    scoreTracking(msg->header.stamp);
+  }
+
+  void scoreTracking(const ros::Time& stamp) {
+    auto t = tracked_.find(stamp);
+    auto g = truth_msgs_.find(stamp);
+    if (t == tracked_.end() || g == truth_msgs_.end()) return;
+    tracking_.add(stamp.toSec(), toTrackedPoints(*t->second), toTruthPoints(*g->second));
+    tracked_.erase(t);
+  }
+
   void onTruth(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     bool any = false;
@@ -100,6 +122,7 @@ class DemoMonitor {
       truth_.erase(truth_.begin());
       truth_msgs_.erase(truth_msgs_.begin());
     }
+    scoreTracking(msg->header.stamp);
   }
 
   // Pairs reconstruction and truth by stamp (either may arrive first) and scores the pair.
@@ -243,6 +266,12 @@ class DemoMonitor {
       const std::string path = output_dir_ + "/volumes.png";
       if (writeVolumeImage(path)) s << "volume image          " << path << "\n";
     }
+    if (tracking_.frames() > 0) {
+      s << "hand/head tracking vs ground truth (" << tracking_.frames() << " frames):\n"
+        << tracking_.summary();
+      const std::string path = output_dir_ + "/tracking_error.png";
+      if (tracking_.writePlot(path)) s << "tracking error plot   " << path << "\n";
+    }
     if (sheet_) {
       const std::string path = output_dir_ + "/contact_sheet.png";
       if (writeContactSheet(*sheet_, path))
@@ -369,7 +398,9 @@ class DemoMonitor {
   }
 
   ros::NodeHandle nh_, pnh_;
-  ros::Subscriber frames_sub_, truth_sub_, diag_sub_;
+  ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_;
+  std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked_;
+  sim::TrackingEvaluator tracking_;
   ros::WallTimer timer_;
   std::mutex mutex_;
   int expected_ = 0, columns_ = 4, received_ = 0, exit_code_ = 0;

@@ -73,4 +73,27 @@ void toTruthVolumeMsgs(const sim::Oracle& oracle, const Eigen::Vector3d& workspa
   }
 }
 
+std::vector<sim::TrackedPoint> toTrackedPoints(const tabletop_msgs::TrackedTargets& msg) {
+  std::vector<sim::TrackedPoint> out;
+  for (const auto& t : msg.targets) {
+    sim::TrackedPoint p;
+    p.id = t.id;
+    p.hand = t.type == tabletop_msgs::TrackedTarget::HAND;
+    p.position = Eigen::Vector3d(t.position.x, t.position.y, t.position.z);
+    p.active = t.active;
+    out.push_back(p);
+  }
+  return out;
+}
+
+sim::TruthPoints toTruthPoints(const tabletop_msgs::TrackedTargets& msg) {
+  sim::TruthPoints truth;
+  for (const auto& t : msg.targets) {
+    if (t.id > 2) continue;
+    truth.position[t.id] = Eigen::Vector3d(t.position.x, t.position.y, t.position.z);
+    truth.visible[t.id] = t.active;
+  }
+  return truth;
+}
+
 }  // namespace tabletop_capture

@@ -8,6 +8,7 @@
 #include <tabletop_msgs/VoxelVolume.h>
 
 #include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_capture/sim/tracking_evaluator.h"
 
 namespace tabletop_capture {
 
@@ -26,5 +27,10 @@ void toTruthVolumeMsgs(const sim::Oracle& oracle, const Eigen::Vector3d& workspa
                        const Eigen::Vector3d& workspace_size, const Eigen::Vector3i& dims,
                        const ros::Time& stamp, const std::string& frame_id,
                        tabletop_msgs::VoxelVolume* body, tabletop_msgs::VoxelVolume* skin);
+
+// For sim::TrackingEvaluator: a tracker's hands/targets, and ground_truth/targets (ids 0 left
+// hand, 1 right hand, 2 head; active = visible).
+std::vector<sim::TrackedPoint> toTrackedPoints(const tabletop_msgs::TrackedTargets& msg);
+sim::TruthPoints toTruthPoints(const tabletop_msgs::TrackedTargets& msg);
 
 }  // namespace tabletop_capture

@@ -1,0 +1,129 @@
+// Parameters of the MPF hand/head tracker (thesis 5.1, 6.3). Units are SI (metres, seconds).
+// Where the thesis gives a figure it is quoted; the others it leaves open, and the comment says
+// how the default was chosen (the simulated rig: 8 cameras, 64x64x48 volumes of 15.6 mm voxels).
+#pragma once
+
+#include <Eigen/Core>
+
+namespace hand_tracking {
+
+struct MpfParams {
+  // ---- Particles (thesis 5.1 / 7.1: 400 per hand, 200 for the head) ------------------------
+  int hand_particles = 400;
+  int head_particles = 200;
+
+  // ---- Observation model (thesis 5.1.3) -----------------------------------------------------
+  // Head: mean skin-coloured-foreground probability in a box that encompasses the head (edge
+  // lengths, m). The simulated head's skin ellipsoid is 15 x 19 x 23 cm, the face its front
+  // half. A box that holds the whole head fills with skin where a hand, or both hands
+  // together, fill well under half of it (the volume-size cue that tells heads from hands);
+  // a smaller one (12 cm) settles on the neck and chin, which are skin too.
+  Eigen::Vector3d head_box{0.18, 0.18, 0.20};
+  // Hand: mean skin probability in a palm-sized box (m) times the mean non-occupancy (1 - P(F)
+  // from the body volume) of the box's frontal plane: a slab of frontal_plane_thickness just
+  // outside the box face that points along frontal_direction, over the box's cross-section.
+  // A palm is ~8 x 10 x 3 cm; 9 cm also holds a fist.
+  Eigen::Vector3d hand_box{0.09, 0.09, 0.09};
+  // Unit vector along +-x, +-y or +-z (boxes are axis-aligned): towards the screen. In the
+  // world frame of DESIGN.md section 3 (and the simulated rig) the user sits at -y and the
+  // screen stands at +y, so +y. The user's hands never pass through this plane, forearms do.
+  Eigen::Vector3d frontal_direction = Eigen::Vector3d::UnitY();
+  double frontal_plane_thickness = 0.016;  // m, one voxel of the 64x64x48 tracking volume
+  double frontal_plane_gap = 0.0;          // m between the box face and the slab
+  // Particle weight = observation^likelihood_exponent. The thesis uses the observation itself
+  // (exponent 1); box means change slowly with position (a 1 cm shift of a 9 cm box changes
+  // the mean by ~10 %), so raw weights barely discriminate within a particle cloud: on the
+  // simulated rig the hand clouds then drift off their hands within seconds. The exponent
+  // sharpens the likelihood (the annealing device of 5.2); 1 reproduces the thesis.
+  double likelihood_exponent = 8.0;
+  // true: boxes integrate the voxel field with fractional coverage of boundary voxels
+  // (IntegralVolume::boxMeanSmooth, 64 reads per box), so the likelihood is continuous in the
+  // particle position; false: voxel-centre box means (8 reads), as the thesis.
+  bool smooth_boxes = true;
+
+  // ---- Dynamics (thesis 5.1.3: head random walk; hands 1/3 each AR(1), AR(2), AR(3)) ---------
+  // Process noise: standard deviation per axis of one step of reference_dt (m); steps of other
+  // lengths scale it linearly (motion per frame is proportional to the frame time).
+  double reference_dt = 0.04;    // s (25 fps)
+  double head_noise = 0.008;     // random walk; a seated head moves < 0.2 m/s
+  double hand_noise_ar1 = 0.02;  // random walk: covers ~0.5 m/s of unmodelled motion per axis
+  double hand_noise_ar2 = 0.008; // constant velocity
+  double hand_noise_ar3 = 0.005; // constant acceleration
+  // Speed limit of a particle (m/s): keeps the AR(2)/AR(3) extrapolations of noisy particle
+  // histories from running away. Reaching hands peak at ~1.5 m/s.
+  double max_speed = 3.0;
+
+  // ---- Track birth (thesis 5.1.2) -----------------------------------------------------------
+  // Inactive components scatter their particles over the workspace (half uniformly, half on
+  // voxels of the skin volume above search_skin_threshold, a proposal that only decides where
+  // to look); the best one activates the component if its observation reaches the
+  // initialisation weight and it lies at least birth_min_distance from every tracked target.
+  // Observations of the simulated rig's volumes: an empty workspace ~0.04 everywhere, a hand
+  // resting on the desk ~0.35, a raised hand 0.35-0.45, the head ~0.55-0.65, the face seen
+  // through a palm box ~0.5 (the head distance keeps hands off it).
+  double head_init_weight = 0.45;  // observation (0..1)
+  double hand_init_weight = 0.25;
+  double birth_min_distance = 0.15;  // m
+  double birth_spread = 0.02;        // m, std of the new component's particles around the find
+  double search_skin_threshold = 0.5;
+  double search_skin_fraction = 0.5;
+
+  // ---- Reconfiguration (thesis 5.1.2): k-means + merge / split / loss ------------------------
+  int kmeans_max_iterations = 50;  // thesis: 50, "never reached in practice"
+  // A hand keeps a cluster of its own only while its observation at the estimate reaches the
+  // tracking weight (else it is lost; hysteresis: tracking < initialisation weight) and it
+  // lies at least merge_distance from the means chosen before it (else it merges).
+  double head_track_weight = 0.25;
+  double hand_track_weight = 0.15;
+  double merge_distance = 0.10;  // m
+  // A merged (or any) hand cloud splits when its best particle reaches the initialisation
+  // weight at least split_distance from every chosen mean (> merge_distance: hysteresis).
+  double split_distance = 0.15;  // m
+  // A hand closer than this to the head's mean is taken for part of the head (neck, chin,
+  // face: the simulated neck is bare skin, like the thesis' users'): no hand is born there,
+  // and a hand that gets there is lost (its particles settle on the head: foreign type).
+  double head_hand_distance = 0.22;  // m
+  // Mixture weights pi_m,t ~ pi_m,t-1 x (mean particle weight) are kept above this floor
+  // (then renormalised): the product over frames would otherwise drive a component whose
+  // observation is systematically lower (hands vs head) to 0 within seconds.
+  double min_mixture_weight = 0.01;
+  // A hand that comes back (split after a merge, or re-found after a loss while the other
+  // hand stayed tracked) gets its old identity if it returns within this time (s).
+  double identity_memory = 10.0;
+
+  // ---- Workspace (DESIGN.md section 3 default user space) -----------------------------------
+  Eigen::Vector3d workspace_min{-0.5, -0.5, 0.0};
+  Eigen::Vector3d workspace_size{1.0, 1.0, 0.75};
+
+  // ---- Reported position --------------------------------------------------------------------
+  // true: the reported position is the centroid of the skin probability within a box around
+  // the particle mean (voxels above a threshold, nearer this target's particle mean than any
+  // other target's), iterated (mean shift); false: the weighted particle mean (thesis).
+  // Why: the box likelihood peaks where the box holds the most skin, which is where the palm
+  // is, not at the centroid of palm + fingers; the frontal-plane factor pushes it towards the
+  // finger tips. The refinement measures what the target's position is defined as.
+  // Hands: a 20 cm box holds a whole hand (wrist to finger tips ~18 cm); only voxels above 0.9
+  // count, because the hull's fringe of low probabilities (voxels that are skin in only some
+  // views) lies mostly above and behind a hand on the desk, where the cameras cannot carve.
+  bool refine_hand_centroid = true;
+  Eigen::Vector3d hand_centroid_box{0.20, 0.20, 0.20};
+  double hand_centroid_threshold = 0.9;
+  // Head: a head-sized box and every voxel (the hull's fringe around the face reaches into the
+  // hair and balances the face towards the head's centre). On the simulated rig it leaves the
+  // mean error as it is and halves the worst case (the particle mean follows the face as the
+  // head turns).
+  bool refine_head_centroid = true;
+  Eigen::Vector3d head_centroid_box{0.20, 0.20, 0.20};
+  double head_centroid_threshold = 0.0;
+  int centroid_iterations = 3;
+
+  // OpenMP threads for the particle weights (0 = OpenMP default). 1000 particles take 0.42 ms
+  // on one core and 0.37 ms on two (bench_mpf): the serial prediction and the integral volumes
+  // dominate, and in a nodelet manager a second team would compete with the reconstruction's.
+  int threads = 1;
+
+  // Throws std::invalid_argument naming the field.
+  void validate() const;
+};
+
+}  // namespace hand_tracking

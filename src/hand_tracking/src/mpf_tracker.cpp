@@ -1,0 +1,649 @@
+#include "hand_tracking/mpf_tracker.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "hand_tracking/resampling.h"
+
+namespace hand_tracking {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+void checkVolume(const psfs::ProbabilityVolume& v, const char* name) {
+  try {
+    v.grid.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("hand_tracking::MpfTracker: ") + name +
+                                " volume has an invalid grid: " + e.what());
+  }
+  if (v.data.size() != v.grid.numVoxels())
+    throw std::invalid_argument(std::string("hand_tracking::MpfTracker: ") + name +
+                                " volume has " + std::to_string(v.data.size()) +
+                                " bytes but its grid " + v.grid.describe() + " needs " +
+                                std::to_string(v.grid.numVoxels()));
+}
+
+}  // namespace
+
+MpfTracker::MpfTracker(const MpfParams& params, uint64_t seed)
+    : params_((params.validate(), params)), seed_(seed), observation_(params_) {
+  const int n = params_.head_particles + 2 * params_.hand_particles;
+  parts_.resize(n);
+  next_.resize(n);
+  reset();
+}
+
+void MpfTracker::reset() {
+  rng_.seed(seed_);
+  int begin = 0;
+  for (int s = 0; s < kNumSlots; ++s) {
+    Component& c = comps_[s];
+    c = Component();
+    c.type = s == kHeadSlot ? Target::kHead : Target::kHand;
+    c.begin = begin;
+    c.count = s == kHeadSlot ? params_.head_particles : params_.hand_particles;
+    begin += c.count;
+  }
+  for (P& p : parts_) p = P();
+  next_id_ = 1;
+  time_ = 0;
+  prev_dt_ = 0;
+  frames_ = 0;
+  times_ = Times();
+  stats_ = Stats();
+  targets_.assign(kNumSlots, Target());
+  for (int s = 0; s < kNumSlots; ++s) targets_[s].type = comps_[s].type;
+}
+
+void MpfTracker::validateInput(const psfs::ProbabilityVolume& skin,
+                               const psfs::ProbabilityVolume& body, double dt) const {
+  if (!std::isfinite(dt) || !(dt > 0.0))
+    throw std::invalid_argument("hand_tracking::MpfTracker: dt must be finite and > 0 (got " +
+                                std::to_string(dt) + ")");
+  checkVolume(skin, "skin");
+  checkVolume(body, "body");
+}
+
+Eigen::Vector3f MpfTracker::clampToWorkspace(const Eigen::Vector3f& x) const {
+  const Eigen::Vector3f lo = params_.workspace_min.cast<float>();
+  const Eigen::Vector3f hi = (params_.workspace_min + params_.workspace_size).cast<float>();
+  return x.cwiseMax(lo).cwiseMin(hi);
+}
+
+Eigen::Vector3f MpfTracker::searchPosition() {
+  std::uniform_real_distribution<float> u01(0.f, 1.f);
+  const float pick = u01(rng_);
+  const Eigen::Vector3f j(u01(rng_), u01(rng_), u01(rng_));
+  if (!search_voxels_.empty() && pick < params_.search_skin_fraction) {
+    const size_t k = std::min(search_voxels_.size() - 1,
+                              static_cast<size_t>(u01(rng_) * search_voxels_.size()));
+    const psfs::VoxelGrid& g = skin_->grid;
+    const Eigen::Vector3i v = g.coords(search_voxels_[k]);
+    const Eigen::Vector3d p =
+        g.origin + g.voxel_size * (v.cast<double>() + j.cast<double>());
+    return clampToWorkspace(p.cast<float>());
+  }
+  return (params_.workspace_min.cast<float>() +
+          params_.workspace_size.cast<float>().cwiseProduct(j));
+}
+
+void MpfTracker::predict(double dt) {
+  const float r = prev_dt_ > 0.0 ? static_cast<float>(dt / prev_dt_) : 1.f;
+  const float scale = static_cast<float>(dt / params_.reference_dt);
+  const float max_step = static_cast<float>(params_.max_speed * dt);
+  std::normal_distribution<float> normal(0.f, 1.f);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+
+  bool searching = false;
+  for (const Component& c : comps_) searching |= !c.active;
+  search_voxels_.clear();
+  if (searching) {
+    const uint8_t thr = static_cast<uint8_t>(std::floor(255.0 * params_.search_skin_threshold));
+    const std::vector<uint8_t>& d = skin_->data;
+    for (size_t i = 0; i < d.size(); ++i)
+      if (d[i] > thr) search_voxels_.push_back(static_cast<uint32_t>(i));
+  }
+
+  for (int s = 0; s < kNumSlots; ++s) {
+    Component& c = comps_[s];
+    if (c.active) {
+      // Gather the component's particles (after last frame's reclustering they may sit in any
+      // pool) and resample its own pool from them.
+      gather_.clear();
+      gather_w_.clear();
+      for (size_t i = 0; i < parts_.size(); ++i)
+        if (parts_[i].active && parts_[i].comp == s) {
+          gather_.push_back(static_cast<int>(i));
+          gather_w_.push_back(parts_[i].wn);
+        }
+      double total = 0.0;
+      for (double w : gather_w_) total += w;
+      if (gather_.empty() || !(total > 0.0)) {
+        // Cannot happen after reconfigure() (an active component keeps weight); be safe.
+        endTrack(s, -1, Eigen::Vector3d::Zero());
+      }
+    }
+    if (c.active) {
+      systematicResample(gather_w_.data(), gather_w_.size(), c.count, u01(rng_), &picks_);
+      for (int k = 0; k < c.count; ++k) {
+        const P& a = parts_[gather_[picks_[k]]];
+        P& q = next_[c.begin + k];
+        q = P();
+        q.h.x = a.x;
+        q.h.x1 = a.h.x;
+        q.h.x2 = a.h.x1;
+        q.comp = s;
+        q.active = true;
+        Eigen::Vector3f noise(normal(rng_), normal(rng_), normal(rng_));
+        Eigen::Vector3f x;
+        if (c.type == Target::kHead) {
+          x = q.h.x + static_cast<float>(params_.head_noise) * scale * noise;
+        } else {
+          const MotionModel m = handModelOf(k);
+          const double sigma = m == MotionModel::kAR1   ? params_.hand_noise_ar1
+                               : m == MotionModel::kAR2 ? params_.hand_noise_ar2
+                                                        : params_.hand_noise_ar3;
+          x = extrapolate(m, q.h, r) + static_cast<float>(sigma) * scale * noise;
+        }
+        q.x = clampToWorkspace(limitStep(q.h.x, x, max_step));
+      }
+    } else {  // searching: scatter over the workspace
+      for (int k = 0; k < c.count; ++k) {
+        P& q = next_[c.begin + k];
+        q = P();
+        q.x = searchPosition();
+        q.h.x = q.h.x1 = q.h.x2 = q.x;
+        q.comp = s;
+        q.active = false;  // searching
+      }
+    }
+  }
+  parts_.swap(next_);
+  prev_dt_ = dt;
+}
+
+void MpfTracker::evaluate(int begin, int end) {
+  const double kappa = params_.likelihood_exponent;
+  const int threads = params_.threads > 0 ? params_.threads : omp_get_max_threads();
+  const Target::Type types[kNumSlots] = {comps_[0].type, comps_[1].type, comps_[2].type};
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && end - begin > 128)
+  for (int i = begin; i < end; ++i) {
+    P& p = parts_[i];
+    const double o = observation_(types[p.comp], skin_iv_, body_iv_, p.x.cast<double>());
+    p.obs = o;
+    p.w = kappa == 1.0 ? o : std::pow(o, kappa);
+  }
+}
+
+void MpfTracker::updateEstimate(int s, bool normalised) {
+  Component& c = comps_[s];
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double mass = 0.0;
+  for (const P& p : parts_)
+    if (p.active && p.comp == s) {
+      const double w = normalised ? p.wn : p.w;
+      sum += w * p.x.cast<double>();
+      mass += w;
+    }
+  if (mass > 0.0) c.estimate = sum / mass;
+  c.estimate_obs = observation_(c.type, skin_iv_, body_iv_, c.estimate);
+}
+
+void MpfTracker::assignIdentity(int s, const Eigen::Vector3d& at) {
+  Component& c = comps_[s];
+  const bool remembered =
+      c.last_id != 0 && time_ - c.inactive_since <= params_.identity_memory;
+  if (c.type == Target::kHead) {
+    c.id = c.last_id != 0 ? c.last_id : next_id_++;  // there is only one head
+  } else {
+    const int o = s == 1 ? 2 : 1;
+    Component& other = comps_[o];
+    const bool other_continuous = other.active && other.active_since <= c.inactive_since;
+    if (remembered && other_continuous) {
+      if (c.merged_into == o && (at - other.estimate).dot(c.merge_offset) < 0.0) {
+        // The partner took this hand's side: swap the pair's identities back.
+        c.id = other.id;
+        other.id = c.last_id;
+      } else {
+        c.id = c.last_id;
+      }
+    } else {
+      c.id = next_id_++;
+    }
+  }
+  c.active_since = time_;
+  c.merged_into = -1;
+}
+
+void MpfTracker::activate(int s, const Eigen::Vector3d& at) {
+  Component& c = comps_[s];
+  std::normal_distribution<float> normal(0.f, 1.f);
+  const float spread = static_cast<float>(params_.birth_spread);
+  const Eigen::Vector3f centre = at.cast<float>();
+  for (int k = 0; k < c.count; ++k) {
+    P& q = parts_[c.begin + k];
+    q = P();
+    Eigen::Vector3f n(normal(rng_), normal(rng_), normal(rng_));
+    q.x = clampToWorkspace(centre + spread * n);
+    q.h.x = q.h.x1 = q.h.x2 = q.x;  // at rest
+    q.comp = s;
+    q.active = true;
+  }
+  evaluate(c.begin, c.begin + c.count);
+  int active = 0;
+  double pi_sum = 0.0;
+  for (const Component& o : comps_)
+    if (o.active) {
+      ++active;
+      pi_sum += o.pi;
+    }
+  // Prior mixture weight of a newcomer: an equal share (the thesis leaves it open).
+  c.pi = active > 0 ? pi_sum / active : 1.0;
+  c.active = true;
+  assignIdentity(s, at);
+  c.estimate = at;
+}
+
+void MpfTracker::births() {
+  for (int s = 0; s < kNumSlots; ++s) {
+    Component& c = comps_[s];
+    if (c.active) continue;
+    const double init =
+        c.type == Target::kHead ? params_.head_init_weight : params_.hand_init_weight;
+    // The strongest search particle at the initialisation weight or above that lies far
+    // enough from every tracked target.
+    int best = -1;
+    double best_obs = -1.0;
+    for (int i = c.begin; i < c.begin + c.count; ++i) {
+      const P& p = parts_[i];
+      if (p.obs < init || p.obs <= best_obs) continue;
+      const Eigen::Vector3d x = p.x.cast<double>();
+      bool far = true;
+      for (const Component& o : comps_) {
+        const double min_d = c.type == Target::kHand && o.type == Target::kHead
+                                 ? std::max(params_.birth_min_distance, params_.head_hand_distance)
+                                 : params_.birth_min_distance;
+        if (o.active && (o.estimate - x).norm() < min_d) far = false;
+      }
+      if (!far) continue;
+      best_obs = p.obs;
+      best = i;
+    }
+    if (best < 0) continue;
+    const Eigen::Vector3d at = parts_[best].x.cast<double>();
+    // Volume-size check (thesis 5.1): while no head is tracked, a hand is not born on a blob
+    // that passes as a head (the face fills a palm box as well as a hand does).
+    if (c.type == Target::kHand && !comps_[kHeadSlot].active &&
+        observation_.head(skin_iv_, body_iv_, at) >= params_.head_init_weight)
+      continue;
+    activate(s, at);
+    ++stats_.births;
+  }
+}
+
+void MpfTracker::mixWeights() {
+  double total = 0.0;
+  for (int s = 0; s < kNumSlots; ++s) {
+    Component& c = comps_[s];
+    if (!c.active) continue;
+    double sum = 0.0;
+    for (int i = 0; i < static_cast<int>(parts_.size()); ++i)
+      if (parts_[i].active && parts_[i].comp == s) sum += parts_[i].w;
+    if (!(sum > 0.0)) {  // nothing left to track
+      endTrack(s, -1, Eigen::Vector3d::Zero());
+      for (P& p : parts_)
+        if (p.comp == s) p.active = false;
+      continue;
+    }
+    for (P& p : parts_)
+      if (p.active && p.comp == s) p.wn = p.w / sum;
+    c.pi *= sum / c.count;
+    total += c.pi;
+  }
+  if (!(total > 0.0)) return;
+  // Normalise, then keep every active component above the floor (see MpfParams).
+  for (Component& c : comps_)
+    if (c.active) c.pi /= total;
+  double sum = 0.0;
+  for (Component& c : comps_)
+    if (c.active) {
+      c.pi = std::max(c.pi, params_.min_mixture_weight);
+      sum += c.pi;
+    }
+  for (Component& c : comps_)
+    if (c.active) c.pi /= sum;
+}
+
+void MpfTracker::endTrack(int s, int merged_into, const Eigen::Vector3d& merge_offset) {
+  Component& c = comps_[s];
+  c.active = false;
+  c.pi = 0.0;
+  c.last_id = c.id;
+  c.inactive_since = time_;
+  c.merged_into = merged_into;
+  c.merge_offset = merged_into >= 0 ? merge_offset : Eigen::Vector3d::Zero();
+  ++(merged_into >= 0 ? stats_.merges : stats_.losses);
+}
+
+void MpfTracker::reconfigure() {
+  struct Mean {
+    Eigen::Vector3d position;
+    Target::Type type;
+    int slot;  // component the mean continues, or -1 (split)
+  };
+  std::vector<Mean> means;
+  // Where a hand mean may go: at least hand_distance from the hand means chosen so far and
+  // head_hand_distance from the head's (closer, it is taken for the head: neck, chin, face).
+  auto handPlaceOk = [&](const Eigen::Vector3d& x, double hand_distance) {
+    for (const Mean& m : means) {
+      const double d = (m.position - x).norm();
+      if (d < (m.type == Target::kHead ? params_.head_hand_distance : hand_distance))
+        return false;
+    }
+    return true;
+  };
+  // The strongest particle of a component at min_obs or above (and, for a hand, at a place
+  // handPlaceOk(x, hand_distance) accepts).
+  auto bestParticle = [&](int s, double min_obs, double hand_distance, Eigen::Vector3d* at) {
+    double best_w = -1.0;
+    for (const P& p : parts_) {
+      if (!p.active || p.comp != s || p.obs < min_obs || p.w <= best_w) continue;
+      const Eigen::Vector3d x = p.x.cast<double>();
+      if (comps_[s].type == Target::kHand && !handPlaceOk(x, hand_distance)) continue;
+      best_w = p.w;
+      *at = x;
+    }
+    return best_w >= 0.0;
+  };
+
+  for (int s = 0; s < kNumSlots; ++s)
+    if (comps_[s].active) updateEstimate(s, true);
+
+  // Rule 1: the head first (largest target, highest priority): its estimate at the tracking
+  // weight or above, else its strongest particle that is; else the head is lost.
+  {
+    const Component& h = comps_[kHeadSlot];
+    Eigen::Vector3d at;
+    if (h.active) {
+      if (h.estimate_obs >= params_.head_track_weight)
+        means.push_back({h.estimate, Target::kHead, kHeadSlot});
+      else if (bestParticle(kHeadSlot, params_.head_track_weight, 0.0, &at))
+        means.push_back({at, Target::kHead, kHeadSlot});
+    }
+  }
+  // Rule 2: one mean per tracked hand, older tracks first (they keep their identity when two
+  // merge). The estimate qualifies at the tracking weight or above at a place handPlaceOk
+  // accepts (merge_distance); else the strongest particle at the initialisation weight at
+  // least split_distance from the means (the thesis' alternative: the hand still has a mode
+  // of its own; the split distance keeps the fringe of a merged blob from passing for one);
+  // else the hand gets no mean: merged into the nearby hand mean if its estimate is still a
+  // good hand, lost otherwise (so is a hand that ran into the head).
+  int hand_order[2] = {1, 2};
+  if (comps_[2].active && (!comps_[1].active || comps_[2].active_since < comps_[1].active_since))
+    std::swap(hand_order[0], hand_order[1]);
+  int hand_means = 0;
+  int merged_into_mean[kNumSlots] = {-1, -1, -1};
+  for (int s : hand_order) {
+    const Component& c = comps_[s];
+    if (!c.active) continue;
+    Eigen::Vector3d at;
+    if (c.estimate_obs >= params_.hand_track_weight &&
+        handPlaceOk(c.estimate, params_.merge_distance)) {
+      means.push_back({c.estimate, Target::kHand, s});
+      ++hand_means;
+    } else if (bestParticle(s, params_.hand_init_weight, params_.split_distance, &at)) {
+      means.push_back({at, Target::kHand, s});
+      ++hand_means;
+    } else if (c.estimate_obs >= params_.hand_track_weight) {
+      for (size_t k = 0; k < means.size(); ++k)
+        if (means[k].type == Target::kHand &&
+            (means[k].position - c.estimate).norm() < params_.merge_distance)
+          merged_into_mean[s] = static_cast<int>(k);
+    }
+  }
+  // Rule 3: split: fewer than two hands found, a strong particle far from every mean.
+  for (int s : hand_order) {
+    if (hand_means >= 2) break;
+    if (!comps_[s].active) continue;
+    Eigen::Vector3d at;
+    if (bestParticle(s, params_.hand_init_weight, params_.split_distance, &at)) {
+      means.push_back({at, Target::kHand, -1});
+      ++hand_means;
+    }
+  }
+
+  // A component that got no mean and merged into none is lost: its particles leave the
+  // mixture (else k-means hands them to the nearest cluster, and a vanished hand's cloud would
+  // drag the other hand's estimate towards where it was lost).
+  bool has_mean[kNumSlots] = {false, false, false};
+  for (const Mean& m : means)
+    if (m.slot >= 0) has_mean[m.slot] = true;
+  bool pruned[kNumSlots] = {false, false, false};
+  for (int s = 0; s < kNumSlots; ++s)
+    pruned[s] = comps_[s].active && !has_mean[s] && merged_into_mean[s] < 0;
+
+  // Typed k-means over the particles of the active components.
+  cluster_points_.resize(parts_.size());
+  for (size_t i = 0; i < parts_.size(); ++i) {
+    const P& p = parts_[i];
+    ClusterPoint& q = cluster_points_[i];
+    q.position = p.x;
+    q.active = p.active && comps_[p.comp].active && !pruned[p.comp];
+    q.type = comps_[p.comp].type;
+    q.weight = q.active ? static_cast<float>(comps_[p.comp].pi * p.wn) : 0.f;
+  }
+  std::vector<ClusterMean> cm(means.size());
+  for (size_t k = 0; k < means.size(); ++k) cm[k] = {means[k].position, means[k].type};
+  const KMeansResult km =
+      typedKMeans(cluster_points_, &cm, params_.kmeans_max_iterations, &assignment_);
+  stats_.kmeans_iterations = km.iterations;
+  stats_.kmeans_converged = km.converged;
+
+  // Slots for the clusters: a continued component keeps its slot; a split takes a hand slot
+  // that no cluster continues.
+  std::vector<int> slot_of(means.size(), -1);
+  bool claimed[kNumSlots] = {false, false, false};
+  for (size_t k = 0; k < means.size(); ++k)
+    if (means[k].slot >= 0) {
+      slot_of[k] = means[k].slot;
+      claimed[means[k].slot] = true;
+    }
+  for (size_t k = 0; k < means.size(); ++k)
+    if (means[k].slot < 0)
+      for (int s = 1; s < kNumSlots; ++s)
+        if (!claimed[s]) {
+          slot_of[k] = s;
+          claimed[s] = true;
+          break;
+        }
+
+  // Absolute weights W_i = pi_c w_i of the surviving particles: particles that settled on a
+  // mean of foreign type are deactivated (eq. 5.4 renormalises without them).
+  double new_pi[kNumSlots] = {0, 0, 0};
+  double total = 0.0;
+  for (size_t i = 0; i < parts_.size(); ++i) {
+    P& p = parts_[i];
+    if (!cluster_points_[i].active) {
+      p.active = false;
+      continue;
+    }
+    const int k = assignment_[i];
+    const int old = p.comp;
+    if (k < 0 || slot_of[k] < 0 || cm[k].type != comps_[old].type) {
+      p.active = false;
+      continue;
+    }
+    const double W = comps_[old].pi * p.wn;
+    p.wn = W;  // absolute for now
+    p.comp = slot_of[k];
+    new_pi[p.comp] += W;
+    total += W;
+  }
+
+  // Component transitions. Old estimates are still in comps_ (used for merge offsets).
+  Eigen::Vector3d old_estimate[kNumSlots];
+  for (int s = 0; s < kNumSlots; ++s) old_estimate[s] = comps_[s].estimate;
+  bool continues[kNumSlots] = {false, false, false};
+  for (size_t k = 0; k < means.size(); ++k)
+    if (means[k].slot >= 0 && new_pi[means[k].slot] > 0.0) continues[means[k].slot] = true;
+  for (int s = 0; s < kNumSlots; ++s) {
+    Component& c = comps_[s];
+    if (!c.active || continues[s]) continue;
+    // The track ends: merged (its mean gave way to a nearby hand that continues) or lost.
+    int into = merged_into_mean[s] >= 0 ? slot_of[merged_into_mean[s]] : -1;
+    if (into >= 0 && !continues[into]) into = -1;
+    // Its particles keep the slots k-means gave them (a split may reuse this slot below).
+    endTrack(s, into, into >= 0 ? Eigen::Vector3d(old_estimate[s] - old_estimate[into])
+                                : Eigen::Vector3d::Zero());
+  }
+  // Splits: new components.
+  for (size_t k = 0; k < means.size(); ++k) {
+    if (means[k].slot >= 0 || slot_of[k] < 0 || !(new_pi[slot_of[k]] > 0.0)) continue;
+    Component& c = comps_[slot_of[k]];
+    c.active = true;
+    assignIdentity(slot_of[k], cm[k].position);
+    ++stats_.splits;
+  }
+  // Particles of slots that ended stay deactivated.
+  for (P& p : parts_)
+    if (p.active && !comps_[p.comp].active) p.active = false;
+
+  // Renormalise: pi'_k = sum of W over the cluster (normalised over all), w'_i = W_i / pi'_k.
+  if (total > 0.0) {
+    for (int s = 0; s < kNumSlots; ++s) comps_[s].pi = comps_[s].active ? new_pi[s] / total : 0.0;
+    for (P& p : parts_)
+      if (p.active) p.wn = p.wn / new_pi[p.comp];
+  } else {  // nothing survived
+    for (int s = 0; s < kNumSlots; ++s)
+      if (comps_[s].active) endTrack(s, -1, Eigen::Vector3d::Zero());
+    for (P& p : parts_) p.active = false;
+  }
+
+  stats_.active_particles = 0;
+  for (const P& p : parts_) stats_.active_particles += p.active;
+  for (int s = 0; s < kNumSlots; ++s) {
+    Component& c = comps_[s];
+    if (!c.active) continue;
+    updateEstimate(s, true);
+    const bool refine = c.type == Target::kHand ? params_.refine_hand_centroid
+                                                : params_.refine_head_centroid;
+    c.reported = refine ? refineCentroid(s) : c.estimate;
+  }
+}
+
+Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
+  const Component& c = comps_[s];
+  const psfs::VoxelGrid& g = skin_->grid;
+  const bool hand = c.type == Target::kHand;
+  const Eigen::Vector3d half =
+      0.5 * (hand ? params_.hand_centroid_box : params_.head_centroid_box);
+  const double threshold = hand ? params_.hand_centroid_threshold : params_.head_centroid_threshold;
+  const uint8_t thr = static_cast<uint8_t>(std::floor(255.0 * threshold));
+  Eigen::Vector3d centre = c.estimate;
+  for (int it = 0; it < params_.centroid_iterations; ++it) {
+    Eigen::Vector3i lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, static_cast<int>(std::ceil((centre[a] - half[a] - g.origin[a]) /
+                                                     g.voxel_size - 0.5)));
+      hi[a] = std::min(g.dims[a], static_cast<int>(std::floor((centre[a] + half[a] -
+                                                               g.origin[a]) / g.voxel_size -
+                                                              0.5)) + 1);
+      if (hi[a] <= lo[a]) return centre;
+    }
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double mass = 0.0;
+    for (int z = lo.z(); z < hi.z(); ++z)
+      for (int y = lo.y(); y < hi.y(); ++y) {
+        const uint8_t* row = skin_->data.data() + g.index(0, y, z);
+        for (int x = lo.x(); x < hi.x(); ++x) {
+          const uint8_t v = row[x];
+          if (v <= thr) continue;
+          const Eigen::Vector3d p = g.centre(x, y, z);
+          // Voronoi cell of this target among the tracked ones.
+          const double d = (p - c.estimate).squaredNorm();
+          bool mine = true;
+          for (int t = 0; t < kNumSlots && mine; ++t)
+            if (t != s && comps_[t].active && (p - comps_[t].estimate).squaredNorm() < d)
+              mine = false;
+          if (!mine) continue;
+          sum += v * p;
+          mass += v;
+        }
+      }
+    if (!(mass > 0.0)) return centre;
+    centre = sum / mass;
+  }
+  return centre;
+}
+
+void MpfTracker::publish() {
+  for (int s = 0; s < kNumSlots; ++s) {
+    const Component& c = comps_[s];
+    Target& t = targets_[s];
+    t.type = c.type;
+    t.active = c.active;
+    if (c.active) {
+      t.id = c.id;
+      t.position = c.reported;
+      t.weight = c.pi;
+    } else {
+      t.weight = 0.0;
+      if (c.last_id != 0) t.id = c.last_id;
+    }
+  }
+}
+
+const std::vector<Target>& MpfTracker::update(const psfs::ProbabilityVolume& skin,
+                                              const psfs::ProbabilityVolume& body, double dt) {
+  validateInput(skin, body, dt);
+  const Clock::time_point t0 = Clock::now();
+  stats_ = Stats();
+  skin_ = &skin;
+  skin_iv_.build(skin);
+  body_iv_.build(body);
+  times_.integral_ms = msSince(t0);
+
+  const Clock::time_point t1 = Clock::now();
+  time_ += dt;
+  ++frames_;
+  predict(dt);
+  evaluate(0, static_cast<int>(parts_.size()));
+  for (int s = 0; s < kNumSlots; ++s)
+    if (comps_[s].active) updateEstimate(s, false);  // current modes for the birth distances
+  births();
+  mixWeights();
+  times_.weights_ms = msSince(t1);
+
+  const Clock::time_point t2 = Clock::now();
+  reconfigure();
+  publish();
+  skin_ = nullptr;
+  times_.reconfigure_ms = msSince(t2);
+  times_.total_ms = msSince(t0);
+  return targets_;
+}
+
+std::vector<MpfTracker::Particle> MpfTracker::particles() const {
+  std::vector<Particle> out(parts_.size());
+  for (size_t i = 0; i < parts_.size(); ++i) {
+    const P& p = parts_[i];
+    const bool on = p.active && comps_[p.comp].active;
+    out[i].position = p.x;
+    out[i].weight = on ? static_cast<float>(comps_[p.comp].pi * p.wn) : 0.f;
+    out[i].component = on ? p.comp : -1;
+  }
+  return out;
+}
+
+}  // namespace hand_tracking

@@ -1,0 +1,314 @@
+// MPF nodelet: psfs/skin_volume + psfs/body_volume (same stamp) in; hands/targets
+// (TrackedTargets: head + 2 hand slots, inactive ones flagged), tf frames hand_<id> and head,
+// hands/markers (boxes, labels, optionally the particles) and diagnostics out. The pSfS nodelet
+// takes the active hands of hands/targets as the ROIs of its high-resolution hand volumes (the
+// closed loop of thesis 4.3). A thin wrapper around hand_tracking::MpfTracker.
+//
+// Private parameters: every field of config/mpf.yaml (loaded by the launch files), see there.
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include <boost/make_shared.hpp>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <tabletop_msgs/TrackedTargets.h>
+#include <tabletop_msgs/VoxelVolume.h>
+
+#include "hand_tracking/mpf_tracker.h"
+#include "psfs_reconstruction/ros/volume_msgs.h"
+#include "tabletop_capture/running_stats.h"
+
+namespace hand_tracking {
+namespace {
+
+void vec3(ros::NodeHandle& nh, const std::string& name, Eigen::Vector3d* v) {
+  std::vector<double> x;
+  if (!nh.getParam(name, x)) return;
+  if (x.size() != 3) throw std::invalid_argument(name + " must be a list of 3 numbers");
+  *v = Eigen::Vector3d(x[0], x[1], x[2]);
+}
+
+// Every MpfParams field from the private namespace (missing ones keep their defaults).
+MpfParams loadParams(ros::NodeHandle& nh) {
+  MpfParams p;
+  nh.param("hand_particles", p.hand_particles, p.hand_particles);
+  nh.param("head_particles", p.head_particles, p.head_particles);
+  vec3(nh, "head_box", &p.head_box);
+  vec3(nh, "hand_box", &p.hand_box);
+  vec3(nh, "frontal_direction", &p.frontal_direction);
+  nh.param("frontal_plane_thickness", p.frontal_plane_thickness, p.frontal_plane_thickness);
+  nh.param("frontal_plane_gap", p.frontal_plane_gap, p.frontal_plane_gap);
+  nh.param("likelihood_exponent", p.likelihood_exponent, p.likelihood_exponent);
+  nh.param("smooth_boxes", p.smooth_boxes, p.smooth_boxes);
+  nh.param("reference_dt", p.reference_dt, p.reference_dt);
+  nh.param("head_noise", p.head_noise, p.head_noise);
+  nh.param("hand_noise_ar1", p.hand_noise_ar1, p.hand_noise_ar1);
+  nh.param("hand_noise_ar2", p.hand_noise_ar2, p.hand_noise_ar2);
+  nh.param("hand_noise_ar3", p.hand_noise_ar3, p.hand_noise_ar3);
+  nh.param("max_speed", p.max_speed, p.max_speed);
+  nh.param("head_init_weight", p.head_init_weight, p.head_init_weight);
+  nh.param("hand_init_weight", p.hand_init_weight, p.hand_init_weight);
+  nh.param("birth_min_distance", p.birth_min_distance, p.birth_min_distance);
+  nh.param("birth_spread", p.birth_spread, p.birth_spread);
+  nh.param("search_skin_threshold", p.search_skin_threshold, p.search_skin_threshold);
+  nh.param("search_skin_fraction", p.search_skin_fraction, p.search_skin_fraction);
+  nh.param("kmeans_max_iterations", p.kmeans_max_iterations, p.kmeans_max_iterations);
+  nh.param("head_track_weight", p.head_track_weight, p.head_track_weight);
+  nh.param("hand_track_weight", p.hand_track_weight, p.hand_track_weight);
+  nh.param("merge_distance", p.merge_distance, p.merge_distance);
+  nh.param("split_distance", p.split_distance, p.split_distance);
+  nh.param("min_mixture_weight", p.min_mixture_weight, p.min_mixture_weight);
+  nh.param("identity_memory", p.identity_memory, p.identity_memory);
+  nh.param("head_hand_distance", p.head_hand_distance, p.head_hand_distance);
+  vec3(nh, "workspace_min", &p.workspace_min);
+  vec3(nh, "workspace_size", &p.workspace_size);
+  nh.param("refine_hand_centroid", p.refine_hand_centroid, p.refine_hand_centroid);
+  vec3(nh, "hand_centroid_box", &p.hand_centroid_box);
+  nh.param("hand_centroid_threshold", p.hand_centroid_threshold, p.hand_centroid_threshold);
+  nh.param("refine_head_centroid", p.refine_head_centroid, p.refine_head_centroid);
+  vec3(nh, "head_centroid_box", &p.head_centroid_box);
+  nh.param("head_centroid_threshold", p.head_centroid_threshold, p.head_centroid_threshold);
+  nh.param("centroid_iterations", p.centroid_iterations, p.centroid_iterations);
+  nh.param("threads", p.threads, p.threads);
+  p.validate();
+  return p;
+}
+
+}  // namespace
+
+class MpfNodelet : public nodelet::Nodelet {
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+    diag_->setHardwareID("mpf");
+    diag_->add("mpf hand tracking", this, &MpfNodelet::diagnose);
+    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
+      diag_->force_update();
+    };
+    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    int seed = 1;
+    pnh.param("seed", seed, seed);
+    pnh.param("publish_particles", publish_particles_, false);
+    pnh.param("world_frame", world_frame_, std::string("world"));
+    try {
+      tracker_ = std::make_unique<MpfTracker>(loadParams(pnh), static_cast<uint64_t>(seed));
+    } catch (const std::exception& e) {
+      fatal_ = e.what();
+      NODELET_FATAL("mpf: not started: bad parameters: %s", e.what());
+      return;
+    }
+    targets_pub_ = nh.advertise<tabletop_msgs::TrackedTargets>("hands/targets", 5);
+    markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("hands/markers", 2);
+    tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+    skin_sub_ = nh.subscribe("psfs/skin_volume", 2, &MpfNodelet::onSkin, this);
+    body_sub_ = nh.subscribe("psfs/body_volume", 2, &MpfNodelet::onBody, this);
+    NODELET_INFO("mpf: tracking on %s + %s, %d particles per hand, %d for the head, seed %d",
+                 skin_sub_.getTopic().c_str(), body_sub_.getTopic().c_str(),
+                 tracker_->params().hand_particles, tracker_->params().head_particles, seed);
+  }
+
+  // The two volumes of a frame set arrive one after the other (body first); pair them by stamp.
+  void onSkin(const tabletop_msgs::VoxelVolume::ConstPtr& m) { pair(m, true); }
+  void onBody(const tabletop_msgs::VoxelVolume::ConstPtr& m) { pair(m, false); }
+
+  void pair(const tabletop_msgs::VoxelVolume::ConstPtr& m, bool skin) {
+    tabletop_msgs::VoxelVolume::ConstPtr skin_msg, body_msg;
+    {
+      std::lock_guard<std::mutex> lock(pair_mutex_);
+      auto& mine = skin ? pending_skin_ : pending_body_;
+      auto& other = skin ? pending_body_ : pending_skin_;
+      if (other && other->header.stamp == m->header.stamp) {
+        skin_msg = skin ? m : other;
+        body_msg = skin ? other : m;
+        other.reset();
+      } else {
+        mine = m;
+        return;
+      }
+    }
+    process(*skin_msg, *body_msg);
+  }
+
+  void process(const tabletop_msgs::VoxelVolume& skin_msg, const tabletop_msgs::VoxelVolume& body_msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::string why;
+    if (!psfs::fromVoxelVolumeMsg(skin_msg, &skin_, &why) ||
+        !psfs::fromVoxelVolumeMsg(body_msg, &body_, &why)) {
+      ++rejected_;
+      NODELET_ERROR_THROTTLE(5.0, "mpf: volume at %.3f ignored: %s", skin_msg.header.stamp.toSec(),
+                             why.c_str());
+      return;
+    }
+    const ros::Time stamp = skin_msg.header.stamp;
+    double dt = last_stamp_.isZero() ? tracker_->params().reference_dt : (stamp - last_stamp_).toSec();
+    if (dt <= 0.0) {
+      ++rejected_;
+      NODELET_WARN_THROTTLE(5.0, "mpf: volume at %.3f is not newer than the last one: ignored",
+                            stamp.toSec());
+      return;
+    }
+    // A gap (dropped sets, a paused bag) must not let the dynamics extrapolate wildly.
+    dt = std::min(dt, 0.5);
+    try {
+      tracker_->update(skin_, body_, dt);
+    } catch (const std::exception& e) {
+      ++rejected_;
+      NODELET_ERROR_THROTTLE(5.0, "mpf: %s", e.what());
+      return;
+    }
+    last_stamp_ = stamp;
+    ++frames_;
+    const auto& t = tracker_->lastTimes();
+    total_ms_.add(t.total_ms);
+    integral_ms_.add(t.integral_ms);
+    weights_ms_.add(t.weights_ms);
+    reconfigure_ms_.add(t.reconfigure_ms);
+    const auto& s = tracker_->lastStats();
+    births_ += s.births, merges_ += s.merges, splits_ += s.splits, losses_ += s.losses;
+    publish(stamp);
+  }
+
+  void publish(const ros::Time& stamp) {
+    auto msg = boost::make_shared<tabletop_msgs::TrackedTargets>();
+    msg->header.stamp = stamp;
+    msg->header.frame_id = world_frame_;
+    visualization_msgs::MarkerArray markers;
+    std::vector<geometry_msgs::TransformStamped> tfs;
+    active_ = 0;
+    int slot = 0;
+    for (const Target& t : tracker_->targets()) {
+      tabletop_msgs::TrackedTarget m;
+      m.id = t.id;
+      m.type = t.type == Target::kHead ? tabletop_msgs::TrackedTarget::HEAD
+                                       : tabletop_msgs::TrackedTarget::HAND;
+      m.position.x = t.position.x();
+      m.position.y = t.position.y();
+      m.position.z = t.position.z();
+      m.weight = t.weight;
+      m.active = t.active;
+      msg->targets.push_back(m);
+      const std::string frame = t.type == Target::kHead ? "head" : "hand_" + std::to_string(t.id);
+      visualization_msgs::Marker box;
+      box.header = msg->header;
+      box.ns = "targets";
+      box.id = slot;
+      box.type = visualization_msgs::Marker::CUBE;
+      box.action = t.active ? visualization_msgs::Marker::ADD : visualization_msgs::Marker::DELETE;
+      box.pose.position = m.position;
+      box.pose.orientation.w = 1.0;
+      const Eigen::Vector3d size =
+          t.type == Target::kHead ? tracker_->params().head_box : tracker_->params().hand_box;
+      box.scale.x = size.x(), box.scale.y = size.y(), box.scale.z = size.z();
+      box.color.a = 0.45f;
+      box.color.r = t.type == Target::kHead ? 0.2f : 1.0f;
+      box.color.g = t.type == Target::kHead ? 0.6f : 0.8f;
+      box.color.b = t.type == Target::kHead ? 1.0f : 0.1f;
+      markers.markers.push_back(box);
+      visualization_msgs::Marker label = box;
+      label.ns = "labels";
+      label.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+      label.pose.position.z += 0.5 * size.z() + 0.03;
+      label.scale.x = label.scale.y = 0.0;
+      label.scale.z = 0.04;
+      label.color.r = label.color.g = label.color.b = label.color.a = 1.0f;
+      label.text = frame;
+      markers.markers.push_back(label);
+      if (t.active) {
+        ++active_;
+        geometry_msgs::TransformStamped tf;
+        tf.header = msg->header;
+        tf.child_frame_id = frame;
+        tf.transform.translation.x = t.position.x();
+        tf.transform.translation.y = t.position.y();
+        tf.transform.translation.z = t.position.z();
+        tf.transform.rotation.w = 1.0;
+        tfs.push_back(tf);
+      }
+      ++slot;
+    }
+    if (publish_particles_) {
+      visualization_msgs::Marker cloud;
+      cloud.header = msg->header;
+      cloud.ns = "particles";
+      cloud.type = visualization_msgs::Marker::POINTS;
+      cloud.pose.orientation.w = 1.0;
+      cloud.scale.x = cloud.scale.y = 0.004;
+      for (const auto& p : tracker_->particles()) {
+        if (p.component < 0) continue;
+        geometry_msgs::Point q;
+        q.x = p.position.x(), q.y = p.position.y(), q.z = p.position.z();
+        cloud.points.push_back(q);
+        std_msgs::ColorRGBA c;
+        c.r = p.component == MpfTracker::kHeadSlot ? 0.2f : 1.0f;
+        c.g = 0.8f, c.b = p.component == MpfTracker::kHeadSlot ? 1.0f : 0.1f, c.a = 0.8f;
+        cloud.colors.push_back(c);
+      }
+      markers.markers.push_back(cloud);
+    }
+    targets_pub_.publish(msg);
+    markers_pub_.publish(markers);
+    if (!tfs.empty()) tf_->sendTransform(tfs);
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    if (!fatal_.empty()) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: " + fatal_);
+      return;
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ros::WallTime now = ros::WallTime::now();
+    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
+    const double rate = dt > 0 ? (frames_ - frames_at_last_) / dt : 0.0;
+    if (frames_ == 0)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for volumes");
+    else if (rejected_ > rejected_at_last_)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting volumes (see the log)");
+    else
+      stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "tracking %d target(s)", active_);
+    stat.add("rate (Hz)", rate);
+    stat.add("frames", frames_);
+    stat.add("active targets", active_);
+    stat.add("mpf total (ms)", total_ms_.mean());
+    stat.add("mpf integral volumes (ms)", integral_ms_.mean());
+    stat.add("mpf weights (ms)", weights_ms_.mean());
+    stat.add("mpf reconfiguration (ms)", reconfigure_ms_.mean());
+    stat.add("births", births_);
+    stat.add("merges", merges_);
+    stat.add("splits", splits_);
+    stat.add("losses", losses_);
+    stat.add("volumes rejected", rejected_);
+    last_diag_ = now;
+    frames_at_last_ = frames_;
+    rejected_at_last_ = rejected_;
+  }
+
+  std::unique_ptr<MpfTracker> tracker_;
+  std::string fatal_, world_frame_;
+  bool publish_particles_ = false;
+  ros::Subscriber skin_sub_, body_sub_;
+  ros::Publisher targets_pub_, markers_pub_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer diag_timer_;
+  std::mutex pair_mutex_, mutex_;
+  tabletop_msgs::VoxelVolume::ConstPtr pending_skin_, pending_body_;
+  psfs::ProbabilityVolume skin_, body_;
+  ros::Time last_stamp_;
+  ros::WallTime last_diag_;
+  uint64_t frames_ = 0, frames_at_last_ = 0, rejected_ = 0, rejected_at_last_ = 0;
+  uint64_t births_ = 0, merges_ = 0, splits_ = 0, losses_ = 0;
+  int active_ = 0;
+  tabletop_capture::RunningStats total_ms_, integral_ms_, weights_ms_, reconfigure_ms_;
+};
+
+}  // namespace hand_tracking
+
+PLUGINLIB_EXPORT_CLASS(hand_tracking::MpfNodelet, nodelet::Nodelet)

@@ -1,0 +1,163 @@
+// Integration test of the Mpf nodelet in the full pipeline: simulated rig -> synchroniser ->
+// psfs -> mpf in one nodelet manager (this process). Checks that hands/targets follows the
+// simulated person (errors against ground_truth/targets, same stamps), that the pSfS nodelet
+// closes the loop with hand sub-volumes for the tracked hands' ids, that tf carries the targets,
+// and that a malformed volume is rejected and counted without stopping the tracker.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <mutex>
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <nodelet/loader.h>
+#include <ros/ros.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <tabletop_msgs/HandVolumes.h>
+#include <tabletop_msgs/TrackedTargets.h>
+#include <tabletop_msgs/VoxelVolume.h>
+
+#include "tabletop_capture/ros/sim_truth_msgs.h"
+#include "tabletop_capture/sim/tracking_evaluator.h"
+
+namespace {
+
+namespace sim = tabletop_capture::sim;
+constexpr int kFrames = 125;  // 25 empty + 100 with the person (4 s of reaching)
+constexpr int kEmpty = 25;
+
+bool waitFor(const std::function<bool()>& cond, double seconds) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::WallTime::now() < end && !cond()) ros::WallDuration(0.02).sleep();
+  return cond();
+}
+
+// Never destroyed: class_loader throws from the loader's destructor at exit when plugins of
+// several libraries were loaded; main() unloads the nodelets before roscpp shuts down.
+nodelet::Loader& loader() {
+  static nodelet::Loader* l = new nodelet::Loader(false);
+  return *l;
+}
+
+}  // namespace
+
+TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
+  ros::NodeHandle nh;
+  ros::param::set("/tabletop/sim_rig/max_frames", kFrames);
+  ros::param::set("/tabletop/sim_rig/empty_frames", kEmpty);
+  ros::param::set("/tabletop/sim_rig/script", std::string("reach_targets"));
+  ros::param::set("/tabletop/sim_rig/start_delay", 1.5);
+  ros::param::set("/tabletop/frame_synchronizer/num_cameras", 8);
+  ros::param::set("/tabletop/mpf/seed", 1);
+
+  std::mutex m;
+  std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked, truth;
+  std::map<ros::Time, tabletop_msgs::HandVolumes::ConstPtr> hand_volumes;
+  std::map<std::string, std::string> diag;
+  boost::function<void(const tabletop_msgs::TrackedTargets::ConstPtr&)> on_tracked =
+      [&](const tabletop_msgs::TrackedTargets::ConstPtr& t) {
+        std::lock_guard<std::mutex> l(m);
+        tracked[t->header.stamp] = t;
+      };
+  boost::function<void(const tabletop_msgs::TrackedTargets::ConstPtr&)> on_truth =
+      [&](const tabletop_msgs::TrackedTargets::ConstPtr& t) {
+        std::lock_guard<std::mutex> l(m);
+        truth[t->header.stamp] = t;
+      };
+  boost::function<void(const tabletop_msgs::HandVolumes::ConstPtr&)> on_hands =
+      [&](const tabletop_msgs::HandVolumes::ConstPtr& h) {
+        std::lock_guard<std::mutex> l(m);
+        hand_volumes[h->header.stamp] = h;
+      };
+  boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)> on_diag =
+      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
+        std::lock_guard<std::mutex> l(m);
+        for (const auto& s : d->status)
+          if (s.name.find("mpf hand tracking") != std::string::npos)
+            for (const auto& kv : s.values) diag[kv.key] = kv.value;
+      };
+  auto s1 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/hands/targets", 300, on_tracked);
+  auto s2 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 300, on_truth);
+  auto s3 = nh.subscribe<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 300, on_hands);
+  auto s4 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
+  tf2_ros::Buffer tf_buffer;
+  tf2_ros::TransformListener tf_listener(tf_buffer);
+
+  const nodelet::M_string remap;
+  const nodelet::V_string argv;
+  ASSERT_TRUE(loader().load("/tabletop/mpf", "hand_tracking/Mpf", remap, argv));
+  ASSERT_TRUE(loader().load("/tabletop/psfs", "psfs_reconstruction/Psfs", remap, argv));
+  ASSERT_TRUE(loader().load("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer", remap, argv));
+  ASSERT_TRUE(loader().load("/tabletop/sim_rig", "tabletop_capture/SimRig", remap, argv));
+
+  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return truth.size() >= size_t(kFrames); }, 90.0));
+  ros::WallDuration(2.5).sleep();  // last targets and a diagnostics round
+
+  std::unique_lock<std::mutex> lock(m);
+  // Nearly every reconstructed frame set gives targets (the queues may drop one or two).
+  std::printf("[mpf] %zu target sets for %d frame sets with the person\n", tracked.size(), kFrames - kEmpty);
+  EXPECT_GE(int(tracked.size()), kFrames - kEmpty - 3);
+  sim::TrackingEvaluator ev;
+  for (const auto& t : tracked) {
+    auto g = truth.find(t.first);
+    if (g != truth.end()) ev.add(t.first.toSec(), tabletop_capture::toTrackedPoints(*t.second),
+                             tabletop_capture::toTruthPoints(*g->second));
+  }
+  std::printf("[mpf]\n%s", ev.summary().c_str());
+  // test_mpf_sim measures ~9 mm (hands) and ~11 mm (head) on this script in process; here the
+  // first second includes the acquisition. A loose bar: the wrapper must not lose or distort
+  // what the core computes.
+  for (int t = 0; t < 3; ++t) {
+    EXPECT_GT(ev.report(t).tracked_frames, ev.report(t).visible_frames * 9 / 10) << t;
+    EXPECT_LT(ev.report(t).error_mm.mean(), 20.0) << t;
+    EXPECT_EQ(ev.report(t).identity_switches, 0) << t;
+  }
+  // Closed loop: psfs computed hand sub-volumes for the tracked hands' ids.
+  size_t matched = 0;
+  for (const auto& h : hand_volumes) {
+    auto t = tracked.find(h.first);
+    if (t == tracked.end()) continue;
+    for (uint32_t id : h.second->target_ids) {
+      bool found = false;
+      for (const auto& x : t->second->targets) found = found || (x.active && x.id == id);
+      matched += found;
+    }
+  }
+  std::printf("[mpf] %zu hand sub-volume sets, %zu of their ids match this frame's tracked hands\n",
+              hand_volumes.size(), matched);
+  EXPECT_GT(hand_volumes.size(), tracked.size() / 2);
+  // ROIs come from the previous frame's targets (ids rarely change between frames).
+  EXPECT_GT(matched, hand_volumes.size());
+  // tf of the head.
+  EXPECT_TRUE(tf_buffer.canTransform("world", "head", ros::Time(0)));
+  ASSERT_TRUE(diag.count("volumes rejected"));
+  EXPECT_EQ(diag["volumes rejected"], "0");
+  std::printf("[mpf] diagnostics: mpf total %s ms\n", diag["mpf total (ms)"].c_str());
+  lock.unlock();
+
+  // A malformed pair of volumes (data shorter than the dims say) is rejected and counted.
+  ros::Publisher body_pub = nh.advertise<tabletop_msgs::VoxelVolume>("/tabletop/psfs/body_volume", 1);
+  ros::Publisher skin_pub = nh.advertise<tabletop_msgs::VoxelVolume>("/tabletop/psfs/skin_volume", 1);
+  waitFor([&] { return body_pub.getNumSubscribers() > 0 && skin_pub.getNumSubscribers() > 0; }, 5.0);
+  auto bad = boost::make_shared<tabletop_msgs::VoxelVolume>();
+  bad->header.stamp = ros::Time::now();
+  bad->voxel_size = 0.0156;
+  bad->size_x = bad->size_y = bad->size_z = 4;
+  bad->data.resize(10);
+  body_pub.publish(bad);
+  skin_pub.publish(bad);
+  EXPECT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return diag["volumes rejected"] == "1"; }, 5.0));
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_mpf_pipeline");
+  ros::AsyncSpinner spinner(4);
+  spinner.start();
+  const int rc = RUN_ALL_TESTS();
+  loader().clear();
+  spinner.stop();
+  ros::shutdown();
+  return rc;
+}

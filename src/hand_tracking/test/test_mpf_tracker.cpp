@@ -1,0 +1,421 @@
+// The MPF's logic on synthetic volumes (fast, exact ground truth): skin and body volumes drawn
+// as solid ellipsoids on the 64x64x48 reference grid over a noisy floor, a head, two hands and
+// forearms. Checks birth, tracking, loss and re-acquisition with identity, merge and split with
+// identity, the head exclusion, the input checks, determinism, and the building blocks
+// (resampling, typed k-means, the frontal plane).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "hand_tracking/box_observation.h"
+#include "hand_tracking/mpf_tracker.h"
+#include "hand_tracking/reclustering.h"
+#include "hand_tracking/resampling.h"
+
+namespace hand_tracking {
+namespace {
+
+using Eigen::Vector3d;
+
+// A seated person drawn into the reference grid: head (skin ellipsoid, hair behind it only in
+// the body volume), hands (skin), forearms (body only, coming from behind: -y).
+struct Scene {
+  Vector3d head{0.0, -0.40, 0.57};
+  Vector3d hands[2] = {{-0.18, -0.22, 0.04}, {0.18, -0.22, 0.04}};
+  bool hand_on[2] = {true, true};
+  bool head_on = true;
+};
+
+void fillEllipsoid(psfs::ProbabilityVolume* v, const Vector3d& c, const Vector3d& semi,
+                   uint8_t value) {
+  const psfs::VoxelGrid& g = v->grid;
+  for (int z = 0; z < g.dims.z(); ++z)
+    for (int y = 0; y < g.dims.y(); ++y)
+      for (int x = 0; x < g.dims.x(); ++x) {
+        const Vector3d d = (g.centre(x, y, z) - c).cwiseQuotient(semi);
+        if (d.squaredNorm() <= 1.0) {
+          uint8_t& b = v->data[g.index(x, y, z)];
+          b = std::max(b, value);
+        }
+      }
+}
+
+void render(const Scene& s, uint64_t noise_seed, psfs::ProbabilityVolume* skin,
+            psfs::ProbabilityVolume* body) {
+  const psfs::VoxelGrid g = psfs::referenceGrid(psfs::Resolution::k16mm);
+  std::mt19937_64 rng(noise_seed);
+  std::uniform_int_distribution<int> noise(0, 20);
+  for (psfs::ProbabilityVolume* v : {skin, body}) {
+    v->grid = g;
+    v->data.resize(g.numVoxels());
+    for (auto& b : v->data) b = static_cast<uint8_t>(noise(rng));
+  }
+  if (s.head_on) {
+    fillEllipsoid(skin, s.head, {0.075, 0.095, 0.115}, 230);
+    fillEllipsoid(body, s.head, {0.08, 0.10, 0.12}, 240);
+    fillEllipsoid(body, s.head + Vector3d(0, 0.05, -0.45), {0.17, 0.12, 0.30}, 240);  // torso
+  }
+  for (int h = 0; h < 2; ++h) {
+    if (!s.hand_on[h]) continue;
+    fillEllipsoid(skin, s.hands[h], {0.045, 0.06, 0.025}, 230);
+    fillEllipsoid(body, s.hands[h], {0.045, 0.06, 0.025}, 240);
+    // Forearm behind the hand (towards the user, -y), foreground but not skin.
+    fillEllipsoid(body, s.hands[h] + Vector3d(0, -0.17, 0.02), {0.04, 0.12, 0.04}, 240);
+  }
+}
+
+struct SynthRun {
+  MpfTracker tracker;
+  psfs::ProbabilityVolume skin, body;
+  uint64_t frame = 0;
+  explicit SynthRun(const MpfParams& p = MpfParams(), uint64_t seed = 1) : tracker(p, seed) {}
+  const std::vector<Target>& step(const Scene& s) {
+    render(s, 1000 + frame++, &skin, &body);
+    return tracker.update(skin, body, 0.04);
+  }
+};
+
+// The active hand target nearest to x (or null).
+const Target* handNear(const std::vector<Target>& t, const Vector3d& x) {
+  const Target* best = nullptr;
+  for (size_t i = 1; i < t.size(); ++i)
+    if (t[i].active && (!best || (t[i].position - x).norm() < (best->position - x).norm()))
+      best = &t[i];
+  return best;
+}
+int activeHands(const std::vector<Target>& t) { return t[1].active + t[2].active; }
+
+TEST(MpfTracker, RejectsBadParametersNamingTheField) {
+  auto expectField = [](MpfParams p, const std::string& field) {
+    try {
+      MpfTracker t(p, 1);
+      ADD_FAILURE() << "no exception for " << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  MpfParams p;
+  p.hand_particles = 2;
+  expectField(p, "hand_particles");
+  p = MpfParams();
+  p.head_box.x() = 0;
+  expectField(p, "head_box");
+  p = MpfParams();
+  p.frontal_direction = Vector3d(1, 1, 0).normalized();
+  expectField(p, "frontal_direction");
+  p = MpfParams();
+  p.hand_track_weight = p.hand_init_weight + 0.1;
+  expectField(p, "hand_track_weight");
+  p = MpfParams();
+  p.split_distance = p.merge_distance / 2;
+  expectField(p, "split_distance");
+  p = MpfParams();
+  p.likelihood_exponent = NAN;
+  expectField(p, "likelihood_exponent");
+  p = MpfParams();
+  p.kmeans_max_iterations = 0;
+  expectField(p, "kmeans_max_iterations");
+  p = MpfParams();
+  p.frontal_direction = -Vector3d::UnitX();  // any axis, either sign, is fine
+  EXPECT_NO_THROW(MpfTracker(p, 1));
+}
+
+TEST(MpfTracker, RejectsBadInputAndKeepsItsState) {
+  SynthRun r;
+  Scene s;
+  for (int i = 0; i < 5; ++i) r.step(s);
+  const std::vector<Target> before = r.tracker.targets();
+  ASSERT_EQ(before.size(), 3u);
+  psfs::ProbabilityVolume empty;
+  EXPECT_THROW(r.tracker.update(empty, r.body, 0.04), std::invalid_argument);
+  psfs::ProbabilityVolume short_data = r.skin;
+  short_data.data.pop_back();
+  EXPECT_THROW(r.tracker.update(r.skin, short_data, 0.04), std::invalid_argument);
+  EXPECT_THROW(r.tracker.update(r.skin, r.body, 0.0), std::invalid_argument);
+  EXPECT_THROW(r.tracker.update(r.skin, r.body, NAN), std::invalid_argument);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(r.tracker.targets()[i].active, before[i].active);
+    EXPECT_EQ(r.tracker.targets()[i].position, before[i].position);
+  }
+  // Different grids for skin and body are fine.
+  psfs::ProbabilityVolume coarse;
+  coarse.grid = psfs::workspaceGrid(psfs::Workspace(), {32, 32, 24});
+  coarse.data.assign(coarse.grid.numVoxels(), 0);
+  EXPECT_NO_THROW(r.tracker.update(r.skin, coarse, 0.04));
+}
+
+TEST(MpfTracker, AcquiresHeadAndBothHands) {
+  SynthRun r;
+  Scene s;
+  int frames = 0;
+  while (frames < 10 && !(r.tracker.targets()[0].active && activeHands(r.tracker.targets()) == 2)) {
+    r.step(s);
+    ++frames;
+  }
+  const auto& t = r.tracker.targets();
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_EQ(t[0].type, Target::kHead);
+  EXPECT_EQ(t[1].type, Target::kHand);
+  EXPECT_EQ(t[2].type, Target::kHand);
+  ASSERT_TRUE(t[0].active);
+  ASSERT_EQ(activeHands(t), 2);
+  for (int i = 0; i < 10; ++i) r.step(s);
+  const double head_err = (t[0].position - s.head).norm();
+  double hand_err[2];
+  for (int h = 0; h < 2; ++h) hand_err[h] = (handNear(t, s.hands[h])->position - s.hands[h]).norm();
+  std::printf("[ figures  ] synthetic: all acquired after %d frames; head error %.1f mm, hands "
+              "%.1f / %.1f mm; weights %.3f %.3f %.3f; %.3f ms per frame\n", frames,
+              1e3 * head_err, 1e3 * hand_err[0], 1e3 * hand_err[1], t[0].weight, t[1].weight,
+              t[2].weight, r.tracker.lastTimes().total_ms);
+  EXPECT_LE(frames, 3);
+  EXPECT_LT(head_err, 0.02);
+  EXPECT_LT(hand_err[0], 0.012);
+  EXPECT_LT(hand_err[1], 0.012);
+  EXPECT_NE(t[1].id, t[2].id);
+  EXPECT_NE(t[0].id, t[1].id);
+  EXPECT_NEAR(t[0].weight + t[1].weight + t[2].weight, 1.0, 1e-9);
+  const MpfTracker::Times& times = r.tracker.lastTimes();
+  EXPECT_GT(times.total_ms, 0.0);
+  EXPECT_GE(times.total_ms, times.integral_ms + times.weights_ms + times.reconfigure_ms - 1e-3);
+  // Particles for visualisation: every component's particles, inactive ones marked -1.
+  const auto parts = r.tracker.particles();
+  EXPECT_EQ(parts.size(), 1000u);
+  double sum = 0;
+  for (const auto& p : parts) sum += p.weight;
+  EXPECT_NEAR(sum, 1.0, 1e-4);
+}
+
+TEST(MpfTracker, FollowsAFastHand) {
+  SynthRun r;
+  Scene s;
+  for (int i = 0; i < 5; ++i) r.step(s);
+  const uint32_t id = handNear(r.tracker.targets(), s.hands[1])->id;
+  double worst = 0;
+  // 1 m/s along a diagonal for 0.6 s (a reach), then back.
+  const Vector3d start = s.hands[1], dir = Vector3d(-0.5, 0.7, 0.5).normalized();
+  for (int i = 1; i <= 30; ++i) {
+    const double d = 0.04 * (i <= 15 ? i : 30 - i);
+    s.hands[1] = start + d * dir;
+    const Target* t = handNear(r.step(s), s.hands[1]);
+    ASSERT_NE(t, nullptr);
+    EXPECT_EQ(t->id, id) << "frame " << i;
+    worst = std::max(worst, (t->position - s.hands[1]).norm());
+  }
+  std::printf("[ figures  ] synthetic: hand at 1 m/s followed with worst error %.1f mm\n",
+              1e3 * worst);
+  EXPECT_LT(worst, 0.03);
+}
+
+TEST(MpfTracker, LostHandIsReacquiredWithItsIdentity) {
+  SynthRun r;
+  Scene s;
+  for (int i = 0; i < 5; ++i) r.step(s);
+  const uint32_t left = handNear(r.tracker.targets(), s.hands[0])->id;
+  const uint32_t right = handNear(r.tracker.targets(), s.hands[1])->id;
+  s.hand_on[0] = false;
+  int lost_after = -1;
+  for (int i = 0; i < 10; ++i)
+    if (activeHands(r.step(s)) == 1 && lost_after < 0) lost_after = i + 1;
+  ASSERT_GE(lost_after, 1);
+  EXPECT_LE(lost_after, 2);
+  EXPECT_EQ(handNear(r.tracker.targets(), s.hands[1])->id, right);
+  s.hand_on[0] = true;
+  s.hands[0] += Vector3d(0.05, 0.05, 0.0);  // comes back a little elsewhere
+  int found_after = -1;
+  for (int i = 0; i < 10 && found_after < 0; ++i)
+    if (activeHands(r.step(s)) == 2) found_after = i + 1;
+  std::printf("[ figures  ] synthetic: hand lost after %d frame(s), re-acquired after %d\n",
+              lost_after, found_after);
+  ASSERT_GE(found_after, 1);
+  EXPECT_LE(found_after, 3);
+  EXPECT_EQ(handNear(r.tracker.targets(), s.hands[0])->id, left);
+  EXPECT_EQ(handNear(r.tracker.targets(), s.hands[1])->id, right);
+}
+
+TEST(MpfTracker, HandsMergeWhenTheyMeetAndSplitWithTheirIdentities) {
+  SynthRun r;
+  Scene s;
+  s.hands[0] = {-0.15, -0.10, 0.20};
+  s.hands[1] = {0.15, -0.10, 0.20};
+  for (int i = 0; i < 5; ++i) r.step(s);
+  const uint32_t left = handNear(r.tracker.targets(), s.hands[0])->id;
+  const uint32_t right = handNear(r.tracker.targets(), s.hands[1])->id;
+  ASSERT_NE(left, right);
+  // Approach (0.6 s), stay together (1 s), part again (0.6 s).
+  int together = 0, one_target = 0;
+  for (int i = 0; i < 70; ++i) {
+    const double half = i < 15 ? 0.15 - 0.13 * (i + 1) / 15.0
+                               : (i < 40 ? 0.02 : 0.02 + 0.13 * std::min(1.0, (i - 39) / 15.0));
+    s.hands[0].x() = -half;
+    s.hands[1].x() = half;
+    const auto& t = r.step(s);
+    if (half <= 0.03 && i >= 20) {
+      ++together;
+      one_target += activeHands(t) == 1;
+    }
+  }
+  const auto& t = r.tracker.targets();
+  ASSERT_EQ(activeHands(t), 2);
+  std::printf("[ figures  ] synthetic: one hand target in %d of %d frames with the hands "
+              "together; ids after the split: left %u (was %u), right %u (was %u)\n", one_target,
+              together, handNear(t, s.hands[0])->id, left, handNear(t, s.hands[1])->id, right);
+  EXPECT_EQ(one_target, together);
+  EXPECT_EQ(handNear(t, s.hands[0])->id, left);
+  EXPECT_EQ(handNear(t, s.hands[1])->id, right);
+}
+
+TEST(MpfTracker, NoHandIsBornOnTheHeadOrNeck) {
+  SynthRun r;
+  Scene s;
+  s.hand_on[0] = s.hand_on[1] = false;
+  // A patch of skin just under the head (a bare neck/chin): hand-sized, 15 cm below the head.
+  s.hands[0] = s.head + Vector3d(0, 0.0, -0.15);
+  for (int i = 0; i < 3; ++i) r.step(s);
+  ASSERT_TRUE(r.tracker.targets()[0].active);
+  s.hand_on[0] = true;
+  for (int i = 0; i < 20; ++i) EXPECT_EQ(activeHands(r.step(s)), 0) << "frame " << i;
+}
+
+TEST(MpfTracker, NothingIsBornInAnEmptyWorkspace) {
+  SynthRun r;
+  Scene s;
+  s.head_on = s.hand_on[0] = s.hand_on[1] = false;
+  for (int i = 0; i < 30; ++i)
+    for (const Target& t : r.step(s)) EXPECT_FALSE(t.active);
+  // All-zero volumes too.
+  psfs::ProbabilityVolume zero;
+  zero.grid = psfs::referenceGrid(psfs::Resolution::k16mm);
+  zero.data.assign(zero.grid.numVoxels(), 0);
+  for (int i = 0; i < 5; ++i)
+    for (const Target& t : r.tracker.update(zero, zero, 0.04)) EXPECT_FALSE(t.active);
+}
+
+TEST(MpfTracker, DeterministicForASeedWhateverTheThreadCount) {
+  MpfParams p1, p2;
+  p1.threads = 1;
+  p2.threads = 2;
+  SynthRun a(p1, 42), b(p2, 42), c(p1, 43);
+  Scene s;
+  std::vector<std::vector<Target>> first;
+  bool differs_from_other_seed = false;
+  for (int i = 0; i < 25; ++i) {
+    s.hands[1] = Vector3d(0.18 - 0.01 * i, -0.22 + 0.01 * i, 0.04 + 0.005 * i);
+    const auto ta = a.step(s);
+    const auto tb = b.step(s);
+    c.step(s);
+    first.push_back(ta);
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_EQ(ta[k].active, tb[k].active);
+      ASSERT_EQ(ta[k].id, tb[k].id);
+      ASSERT_EQ(ta[k].position, tb[k].position) << "frame " << i << " target " << k;
+      ASSERT_EQ(ta[k].weight, tb[k].weight);
+    }
+    const auto pa = a.tracker.particles(), pb = b.tracker.particles();
+    const auto pc = c.tracker.particles();
+    for (size_t k = 0; k < pa.size(); ++k) {
+      ASSERT_EQ(pa[k].position, pb[k].position);
+      ASSERT_EQ(pa[k].weight, pb[k].weight);
+      differs_from_other_seed |= pa[k].position != pc[k].position;
+    }
+  }
+  EXPECT_TRUE(differs_from_other_seed);  // the seed matters (the reported centroids may not)
+  // reset(): the same input gives the same output again.
+  a.tracker.reset();
+  a.frame = 0;
+  s = Scene();
+  for (int i = 0; i < 25; ++i) {
+    s.hands[1] = Vector3d(0.18 - 0.01 * i, -0.22 + 0.01 * i, 0.04 + 0.005 * i);
+    const auto ta = a.step(s);
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(ta[k].position, first[i][k].position) << i;
+  }
+}
+
+TEST(MpfTracker, FrontalPlaneMakesForearmsUnlikeHands) {
+  MpfParams p;
+  const BoxObservation obs(p);
+  Vector3d lo, hi;
+  obs.frontalPlane({0.1, 0.2, 0.3}, &lo, &hi);
+  EXPECT_NEAR(lo.y(), 0.2 + 0.045, 1e-12);  // just outside the +y face of the palm box
+  EXPECT_NEAR(hi.y(), 0.2 + 0.045 + p.frontal_plane_thickness, 1e-12);
+  EXPECT_NEAR(lo.x(), 0.1 - 0.045, 1e-12);
+  EXPECT_NEAR(hi.z(), 0.3 + 0.045, 1e-12);
+  // Bare skin along y (a bare forearm): a box on its middle has skin in front; one at its
+  // far end does not.
+  psfs::ProbabilityVolume skin, body;
+  skin.grid = body.grid = psfs::referenceGrid(psfs::Resolution::k16mm);
+  skin.data.assign(skin.grid.numVoxels(), 0);
+  body.data = skin.data;
+  fillEllipsoid(&skin, {0, 0, 0.3}, {0.05, 0.25, 0.05}, 255);
+  fillEllipsoid(&body, {0, 0, 0.3}, {0.05, 0.25, 0.05}, 255);
+  const IntegralVolume s(skin), b(body);
+  const double middle = obs.hand(s, b, {0, 0, 0.3});
+  const double end = obs.hand(s, b, {0, 0.20, 0.3});
+  std::printf("[ figures  ] frontal plane: observation on a bare arm %.3f, at its end %.3f\n",
+              middle, end);
+  EXPECT_LT(middle, 0.15);
+  EXPECT_GT(end, 0.25);
+  EXPECT_NEAR(obs.head(s, b, {0, 0, 0.3}), s.boxMeanSmooth({-0.09, -0.09, 0.2}, {0.09, 0.09, 0.4}),
+              1e-12);
+}
+
+TEST(Resampling, SystematicDrawsAreProportional) {
+  const double w[4] = {0.1, 0.0, 0.6, 0.3};
+  std::vector<int> idx;
+  systematicResample(w, 4, 1000, 0.37, &idx);
+  int count[4] = {0, 0, 0, 0};
+  for (int i : idx) ++count[i];
+  EXPECT_NEAR(count[0], 100, 1);
+  EXPECT_EQ(count[1], 0);
+  EXPECT_NEAR(count[2], 600, 1);
+  EXPECT_NEAR(count[3], 300, 1);
+  EXPECT_TRUE(std::is_sorted(idx.begin(), idx.end()));
+  const double zero[2] = {0, 0};
+  EXPECT_THROW(systematicResample(zero, 2, 10, 0.5, &idx), std::invalid_argument);
+  EXPECT_THROW(systematicResample(w, 0, 10, 0.5, &idx), std::invalid_argument);
+}
+
+TEST(Reclustering, TypedMeansIgnoreForeignPointsAndStopEarly) {
+  std::vector<ClusterPoint> pts;
+  auto add = [&](float x, Target::Type t) {
+    ClusterPoint p;
+    p.position = Eigen::Vector3f(x, 0, 0);
+    p.weight = 1;
+    p.type = t;
+    p.active = true;
+    pts.push_back(p);
+  };
+  for (int i = 0; i < 10; ++i) add(0.0f + 0.01f * i, Target::kHead);  // head blob near 0
+  for (int i = 0; i < 10; ++i) add(0.5f + 0.01f * i, Target::kHand);  // hand blob near 0.5
+  add(0.05f, Target::kHand);  // a hand particle on the head
+  pts.push_back(pts.back());
+  pts.back().active = false;  // inactive: never assigned
+  std::vector<ClusterMean> means = {{Eigen::Vector3d(0.045, 0, 0), Target::kHead},
+                                    {Eigen::Vector3d(0.545, 0, 0), Target::kHand}};
+  std::vector<int> a;
+  const KMeansResult r = typedKMeans(pts, &means, 50, &a);
+  EXPECT_TRUE(r.converged);
+  EXPECT_LE(r.iterations, 2);
+  EXPECT_EQ(a[20], 0);  // the hand particle settles on the head mean (foreign type)
+  EXPECT_EQ(a[21], -1);
+  EXPECT_NEAR(means[0].position.x(), 0.045, 1e-6);  // unaffected by the foreign point
+  EXPECT_NEAR(means[1].position.x(), 0.545, 1e-6);
+  // Far-off seeds move; the hard limit is respected.
+  means = {{Eigen::Vector3d(-1, 0, 0), Target::kHead}, {Eigen::Vector3d(0.2, 0, 0), Target::kHand}};
+  const KMeansResult r1 = typedKMeans(pts, &means, 1, &a);
+  EXPECT_EQ(r1.iterations, 1);
+  EXPECT_FALSE(r1.converged);
+  const KMeansResult r2 = typedKMeans(pts, &means, 50, &a);
+  EXPECT_TRUE(r2.converged);
+  // Every point is nearer the hand mean: the head mean gets no head point and stays; the hand
+  // mean moves to its own type's points (the 10 of the hand blob and the one on the head).
+  EXPECT_EQ(means[0].position.x(), -1.0);
+  EXPECT_NEAR(means[1].position.x(), (5.45 + 0.05) / 11, 1e-6);
+  EXPECT_EQ(a[0], 1);
+}
+
+}  // namespace
+}  // namespace hand_tracking
