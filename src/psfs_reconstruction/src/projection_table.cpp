@@ -105,6 +105,53 @@ __attribute__((target("avx2,fma"))) void projectRowAvx2(const RowParams& p, uint
 }
 #endif
 
+#if PSFS_HAVE_X86_DISPATCH
+// The same steps 16 voxels at a time (same float operations per lane: identical results).
+// GCC 12's AVX-512 intrinsics trip -Wmaybe-uninitialized when inlined (GCC bug 105593).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+__attribute__((target("avx512f,avx2,fma"))) void projectRowAvx512(const RowParams& p, uint32_t* out) {
+  const __m512 a0 = _mm512_set1_ps(p.a[0]), a1 = _mm512_set1_ps(p.a[1]), a2 = _mm512_set1_ps(p.a[2]);
+  const __m512 b0 = _mm512_set1_ps(p.b[0]), b1 = _mm512_set1_ps(p.b[1]), b2 = _mm512_set1_ps(p.b[2]);
+  const __m512 zmin = _mm512_set1_ps(kMinDepth), fone = _mm512_set1_ps(1.0f);
+  const __m512i sentinel = _mm512_set1_epi32(static_cast<int>(p.not_observed));
+  const __m512i lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  for (int x0 = 0; x0 < p.nxp; x0 += 16) {
+    const __mmask16 store = x0 + 16 <= p.nxp ? __mmask16(0xFFFF) : __mmask16(0x00FF);  // nxp: multiple of 8
+    const __m512i xi = _mm512_add_epi32(_mm512_set1_epi32(x0), lanes);
+    const __m512 xs = _mm512_cvtepi32_ps(xi);
+    const __m512 X = _mm512_fmadd_ps(xs, b0, a0), Y = _mm512_fmadd_ps(xs, b1, a1);
+    const __m512 Z = _mm512_fmadd_ps(xs, b2, a2);
+    const __mmask16 front = _mm512_cmp_ps_mask(Z, zmin, _CMP_GT_OQ);
+    const __m512 iz = _mm512_div_ps(fone, _mm512_mask_blend_ps(front, fone, Z));
+    const __m512 xn = _mm512_mul_ps(X, iz), yn = _mm512_mul_ps(Y, iz);
+    const __m512 xx = _mm512_mul_ps(xn, xn), yy = _mm512_mul_ps(yn, yn), xy = _mm512_mul_ps(xn, yn);
+    const __m512 r2 = _mm512_add_ps(xx, yy);
+    const __m512 radial = _mm512_fmadd_ps(
+        r2, _mm512_fmadd_ps(r2, _mm512_fmadd_ps(r2, _mm512_set1_ps(p.k3), _mm512_set1_ps(p.k2)),
+                            _mm512_set1_ps(p.k1)),
+        fone);
+    const __m512 p1 = _mm512_set1_ps(p.p1), p2 = _mm512_set1_ps(p.p2);
+    const __m512 p1x2 = _mm512_set1_ps(p.p1x2), p2x2 = _mm512_set1_ps(p.p2x2);
+    const __m512 tx = _mm512_fmadd_ps(p1x2, xy, _mm512_fmadd_ps(p2x2, xx, _mm512_mul_ps(p2, r2)));
+    const __m512 ty = _mm512_fmadd_ps(p2x2, xy, _mm512_fmadd_ps(p1x2, yy, _mm512_mul_ps(p1, r2)));
+    const __m512 xd = _mm512_fmadd_ps(xn, radial, tx), yd = _mm512_fmadd_ps(yn, radial, ty);
+    const __m512 U = _mm512_fmadd_ps(_mm512_set1_ps(p.fx16), xd, _mm512_set1_ps(p.cx16));
+    const __m512 V = _mm512_fmadd_ps(_mm512_set1_ps(p.fy16), yd, _mm512_set1_ps(p.cy16));
+    const __m512 zero = _mm512_setzero_ps();
+    __mmask16 ok = front & _mm512_cmp_ps_mask(r2, _mm512_set1_ps(p.r2_max), _CMP_LE_OQ);
+    ok &= _mm512_cmp_ps_mask(U, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(U, _mm512_set1_ps(p.u_max), _CMP_LT_OQ);
+    ok &= _mm512_cmp_ps_mask(V, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(V, _mm512_set1_ps(p.v_max), _CMP_LT_OQ);
+    ok &= _mm512_cmpgt_epi32_mask(_mm512_set1_epi32(p.nx), xi);  // padding lanes: not observed
+    const __m512i pu = _mm512_cvttps_epi32(_mm512_maskz_mov_ps(ok, U));
+    const __m512i pv = _mm512_cvttps_epi32(_mm512_maskz_mov_ps(ok, V));
+    const __m512i packed = _mm512_or_si512(pu, _mm512_slli_epi32(pv, 16));
+    _mm512_mask_storeu_epi32(out + x0, store, _mm512_mask_blend_epi32(ok, sentinel, packed));
+  }
+}
+#pragma GCC diagnostic pop
+#endif
+
 [[noreturn]] void badCamera(int index, const std::string& name, const std::string& why) {
   throw std::invalid_argument("psfs::ProjectionTable: camera " + std::to_string(index) + " ('" +
                               name + "'): " + why);
@@ -258,6 +305,10 @@ void ProjectionTable::projectRow(const Camera& cam, int y, int z, uint32_t* out)
   p.nx = grid_.dims.x();
   p.nxp = nxp_;
 #if PSFS_HAVE_X86_DISPATCH
+  if (avx512KernelsActive()) {
+    projectRowAvx512(p, out);
+    return;
+  }
   if (cpuHasAvx2()) {
     projectRowAvx2(p, out);
     return;

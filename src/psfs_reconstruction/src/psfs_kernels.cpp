@@ -279,11 +279,159 @@ __attribute__((target("avx2,fma"))) void rowAvx2(const PsfsRowParams& p, const u
     std::memcpy(out + x0, bytes, static_cast<size_t>(std::min(8, p.nx - x0)));
   }
 }
+
+// ---------------------------------------------------------------------------- AVX-512 ------
+// GCC 12's AVX-512 shift intrinsics start from _mm512_undefined_epi32(), which
+// -Wmaybe-uninitialized reports inside inlined callers (GCC bug 105593): silence it here only.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// The AVX2 kernel 16 voxels at a time (two chunks of the table's sample offsets per step); the
+// same integer and float operations lane by lane, so the same bytes. Masks replace blends.
+#define PSFS_AVX512 __attribute__((target("avx512f,avx512bw,avx2,fma"), always_inline)) inline
+
+PSFS_AVX512 __m512i bilinear512(const KernelView& v, __m512i su, __m512i sv) {
+  const __m512i u0 = _mm512_srli_epi32(su, 4), fu = _mm512_and_si512(su, _mm512_set1_epi32(15));
+  const __m512i v0 = _mm512_srli_epi32(sv, 4), fv = _mm512_and_si512(sv, _mm512_set1_epi32(15));
+  const __m512i idx = _mm512_add_epi32(_mm512_mullo_epi32(v0, _mm512_set1_epi32(v.quad_stride)), u0);
+  const __m512i q = _mm512_i32gather_epi32(idx, v.pairs, 2);
+  const __m512i wv = _mm512_add_epi32(_mm512_mullo_epi32(fv, _mm512_set1_epi32(0x00FF00FF)),
+                                      _mm512_set1_epi32(0x00100010));
+  const __m512i lr = _mm512_maddubs_epi16(q, wv);
+  const __m512i wu = _mm512_add_epi32(_mm512_sub_epi32(_mm512_slli_epi32(fu, 16), fu),
+                                      _mm512_set1_epi32(16));
+  return _mm512_madd_epi16(lr, wu);
+}
+
+PSFS_AVX512 void cswap512(__m512i& a, __m512i& b) {
+  const __m512i lo = _mm512_min_epi32(a, b);
+  b = _mm512_max_epi32(a, b);
+  a = lo;
+}
+
+// Offsets of two consecutive chunks (off0 for lanes 0-7, off1 for lanes 8-15).
+PSFS_AVX512 __m512i pairOf(int32_t lo, int32_t hi) {
+  return _mm512_inserti64x4(_mm512_set1_epi32(lo), _mm256_set1_epi32(hi), 1);
+}
+
+PSFS_AVX512 __m512i medianPair512(const KernelView& v, __m512i uv, const uint32_t* off0,
+                                  const uint32_t* off1) {
+  const __m512i pad = _mm512_set1_epi32(kPad16);
+  const __m512i uf = _mm512_add_epi32(_mm512_and_si512(uv, _mm512_set1_epi32(0xFFFF)), pad);
+  const __m512i vf = _mm512_add_epi32(_mm512_srli_epi32(uv, 16), pad);
+  __m512i s[6];
+  for (int a = 0; a < 3; ++a) {
+    const __m512i du = pairOf(static_cast<int16_t>(off0[a] & 0xFFFFu), static_cast<int16_t>(off1[a] & 0xFFFFu));
+    const __m512i dv = pairOf(static_cast<int32_t>(off0[a]) >> 16, static_cast<int32_t>(off1[a]) >> 16);
+    s[2 * a] = bilinear512(v, _mm512_add_epi32(uf, du), _mm512_add_epi32(vf, dv));
+    s[2 * a + 1] = bilinear512(v, _mm512_sub_epi32(uf, du), _mm512_sub_epi32(vf, dv));
+  }
+  cswap512(s[0], s[5]), cswap512(s[1], s[3]), cswap512(s[2], s[4]);
+  cswap512(s[1], s[2]), cswap512(s[3], s[4]);
+  cswap512(s[0], s[3]), cswap512(s[2], s[5]);
+  cswap512(s[0], s[1]), cswap512(s[2], s[3]), cswap512(s[4], s[5]);
+  cswap512(s[1], s[2]), cswap512(s[3], s[4]);
+  return _mm512_add_epi32(s[2], s[3]);
+}
+
+PSFS_AVX512 __m512i logTerm512(__m512i m) {  // = logTermOfPair per lane
+  const __m512 x = _mm512_cvtepi32_ps(_mm512_max_epi32(m, _mm512_set1_epi32(256)));
+  const __m512i bits = _mm512_castps_si512(x);
+  const __m512 e = _mm512_cvtepi32_ps(_mm512_sub_epi32(_mm512_srli_epi32(bits, 23), _mm512_set1_epi32(127)));
+  const __m512 f = _mm512_castsi512_ps(_mm512_or_si512(_mm512_and_si512(bits, _mm512_set1_epi32(0x007FFFFF)),
+                                                       _mm512_set1_epi32(0x3F800000)));
+  const __m512 one = _mm512_set1_ps(1.0f);
+  const __m512 z = _mm512_div_ps(_mm512_sub_ps(f, one), _mm512_add_ps(f, one));
+  const __m512 z2 = _mm512_mul_ps(z, z);
+  __m512 p = _mm512_fmadd_ps(z2, _mm512_set1_ps(2.0f / 11.0f), _mm512_set1_ps(2.0f / 9.0f));
+  p = _mm512_fmadd_ps(z2, p, _mm512_set1_ps(2.0f / 7.0f));
+  p = _mm512_fmadd_ps(z2, p, _mm512_set1_ps(2.0f / 5.0f));
+  p = _mm512_fmadd_ps(z2, p, _mm512_set1_ps(2.0f / 3.0f));
+  p = _mm512_fmadd_ps(z2, p, _mm512_set1_ps(2.0f));
+  const __m512 lnx = _mm512_fmadd_ps(e, _mm512_set1_ps(kLn2), _mm512_mul_ps(z, p));
+  return _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_sub_ps(lnx, _mm512_set1_ps(kLnFullPair)),
+                                          _mm512_set1_ps(static_cast<float>(ViewEvidence::kLogScale))));
+}
+
+template <int K, bool kMulti>
+__attribute__((target("avx512f,avx512bw,avx2,fma"))) void rowAvx512(const PsfsRowParams& p,
+                                                                  const uint32_t* centres,
+                                                                  const uint32_t* offsets,
+                                                                  uint8_t* out) {
+  const __m512i zero = _mm512_setzero_si512();
+  const __m512i one = _mm512_set1_epi32(1);
+  const __m512i no_ev = _mm512_set1_epi32(kNoEv);
+  const __m512i lo16 = _mm512_set1_epi32(0xFFFF);
+  for (int i = 0; i < p.num_cameras * p.nxp; i += 16)  // as in the AVX2 kernel
+    _mm_prefetch(reinterpret_cast<const char*>(centres + i), _MM_HINT_NTA);
+  for (int x0 = 0; x0 < p.nx; x0 += 16) {
+    // The padded row holds whole chunks of 8: the last step may have only one.
+    const bool two = x0 + 8 < p.nxp;
+    const __mmask16 lanes = two ? __mmask16(0xFFFF) : __mmask16(0x00FF);
+    const int chunk = x0 / ProjectionTable::kChunk;
+    __m512i sum = zero, inactive = zero;
+    __m512i m[K > 0 ? K : 1];
+    for (int j = 0; j < K; ++j) m[j] = no_ev;
+    for (int c = 0; c < p.num_cameras; ++c) {
+      const KernelView& v = p.views[c];
+      // Lanes past the row read 0 (pixel 0): computed, never stored.
+      const __m512i uv = _mm512_maskz_loadu_epi32(lanes, centres + c * p.nxp + x0);
+      __m512i t = zero;
+      if (!kMulti || v.has_mask) {
+        const __m512i pix = _mm512_add_epi32(
+            _mm512_mullo_epi32(_mm512_srli_epi32(uv, 20), _mm512_set1_epi32(v.width)),
+            _mm512_srli_epi32(_mm512_and_si512(uv, lo16), 4));
+        const __m512i g = _mm512_i32gather_epi32(pix, v.terms, 2);
+        t = _mm512_srai_epi32(_mm512_slli_epi32(g, 16), 16);
+      }
+      if (kMulti) {
+        const __mmask16 off_view = v.has_mask
+                                       ? _mm512_cmpgt_epi32_mask(t, zero)
+                                       : _mm512_cmpeq_epi32_mask(uv, _mm512_set1_epi32(static_cast<int>(v.not_observed)));
+        const uint32_t* off0 = offsets + (c * p.chunks + chunk) * 3;
+        const uint32_t* off1 = two ? off0 + 3 : off0;
+        const __m512i tm = logTerm512(medianPair512(v, uv, off0, off1));
+        t = _mm512_mask_mov_epi32(tm, off_view, no_ev);
+      }
+      inactive = _mm512_mask_add_epi32(inactive, _mm512_cmpgt_epi32_mask(t, zero), inactive, one);
+      sum = _mm512_add_epi32(sum, _mm512_min_epi32(t, zero));
+      for (int j = 0; j < K; ++j) {
+        const __m512i lo = _mm512_min_epi32(m[j], t);
+        t = _mm512_max_epi32(m[j], t);
+        m[j] = lo;
+      }
+    }
+    __m512i n = _mm512_sub_epi32(_mm512_set1_epi32(p.num_cameras), inactive);
+    for (int j = 0; j < K; ++j) {
+      const __mmask16 drop = _mm512_cmpgt_epi32_mask(_mm512_set1_epi32(p.drop_below), m[j]);
+      sum = _mm512_mask_sub_epi32(sum, drop, sum, m[j]);
+      n = _mm512_mask_sub_epi32(n, drop, n, one);
+    }
+    const __mmask16 valid = _mm512_cmpgt_epi32_mask(n, _mm512_set1_epi32(p.min_views - 1));
+    __m512 mean = _mm512_mul_ps(_mm512_cvtepi32_ps(sum), _mm512_set1_ps(1.0f / ViewEvidence::kLogScale));
+    mean = _mm512_div_ps(mean, _mm512_cvtepi32_ps(n));
+    mean = _mm512_add_ps(mean, _mm512_set1_ps(p.offset));
+    const __mmask16 in = _mm512_cmp_ps_mask(mean, _mm512_set1_ps(p.log_t), _CMP_GT_OQ);
+    __m512 e = _mm512_mul_ps(_mm512_sub_ps(_mm512_setzero_ps(), mean), _mm512_set1_ps(p.exp_scale));
+    e = _mm512_min_ps(e, _mm512_set1_ps(static_cast<float>(p.exp_table_size - 1)));  // NaN -> max
+    e = _mm512_max_ps(e, _mm512_setzero_ps());
+    const __m512i b = _mm512_i32gather_epi32(_mm512_cvttps_epi32(e), p.exp_table, 4);
+    const __m512i b_in = _mm512_max_epi32(b, _mm512_set1_epi32(p.t_byte + 1));
+    const __m512i b_out = p.zero_outside ? zero : _mm512_min_epi32(b, _mm512_set1_epi32(p.t_byte));
+    const __m512i r = _mm512_maskz_mov_epi32(valid, _mm512_mask_mov_epi32(b_out, in, b_in));
+    uint8_t bytes[16];
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(bytes), _mm512_cvtusepi32_epi8(r));
+    std::memcpy(out + x0, bytes, static_cast<size_t>(std::min(16, p.nx - x0)));
+  }
+}
+
+bool useAvx512() { return avx512KernelsActive(); }
+#pragma GCC diagnostic pop
 #endif
 
 template <int K>
 PsfsRowFn pick(bool multi, bool vector) {
 #if PSFS_HAVE_X86_DISPATCH
+  if (vector && useAvx512()) return multi ? &rowAvx512<K, true> : &rowAvx512<K, false>;
   if (vector) return multi ? &rowAvx2<K, true> : &rowAvx2<K, false>;
 #endif
   (void)vector;

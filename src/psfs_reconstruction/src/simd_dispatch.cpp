@@ -7,6 +7,17 @@
 namespace psfs {
 namespace {
 std::atomic<bool> g_force_scalar{false};
+std::atomic<bool> g_force_avx2{false};
+
+bool detectAvx512() {
+#if PSFS_HAVE_X86_DISPATCH
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+         __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  return false;
+#endif
+}
 
 bool detectAvx2() {
 #if PSFS_HAVE_X86_DISPATCH
@@ -26,5 +37,16 @@ bool avx2Available() {
 void forceScalarKernels(bool force) { g_force_scalar.store(force); }
 
 bool vectorKernelsActive() { return avx2Available() && !g_force_scalar.load(std::memory_order_relaxed); }
+
+bool avx512Available() {
+  static const bool available = detectAvx512();
+  return available;
+}
+
+void forceAvx2Kernels(bool force) { g_force_avx2.store(force); }
+
+bool avx512KernelsActive() {
+  return vectorKernelsActive() && avx512Available() && !g_force_avx2.load(std::memory_order_relaxed);
+}
 
 }  // namespace psfs

@@ -2,6 +2,8 @@
 // synthetic cameras with exact silhouettes, where the visual hull is known in closed form.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -567,13 +569,37 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
       ProjectionTable table(referenceGrid(Resolution::k16mm), rig.cameras, to);
       ViewEvidence ev;
       ev.set(views, multi);
-      ProbabilityVolume vec, sca;
-      PsfsFusion(o).fuse(table, ev, &vec);
+      ProbabilityVolume vec, sca, vec2;
+      PsfsFusion(o).fuse(table, ev, &vec);  // AVX-512 where the CPU has it, else AVX2
+      forceAvx2Kernels(true);
+      PsfsFusion(o).fuse(table, ev, &vec2);
+      forceAvx2Kernels(false);
       forceScalarKernels(true);
       PsfsFusion(o).fuse(table, ev, &sca);
       forceScalarKernels(false);
-      ASSERT_EQ(vec.data, sca.data) << "multi " << multi << " k " << k;
+      ASSERT_EQ(vec.data, sca.data) << "multi " << multi << " k " << k
+                                    << (avx512KernelsActive() ? " (AVX-512)" : " (AVX2)");
+      ASSERT_EQ(vec2.data, sca.data) << "multi " << multi << " k " << k << " (AVX2)";
     }
+}
+
+// The AVX-512 and AVX2 row projections do the same float operations per lane: their tables
+// must be identical to the bit (volumes then agree across CPUs with either extension).
+TEST(ProjectionTable, Avx512AndAvx2ProjectionsAreIdentical) {
+  if (!avx512Available()) GTEST_SKIP() << "no AVX-512 on this CPU: only the AVX2 projection runs";
+  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  ProjectionTableOptions o;
+  o.multi_projection = true;
+  o.storage = TableStorage::kPrecomputed;
+  const ProjectionTable wide(referenceGrid(Resolution::k16mm), rig.cameras, o);
+  forceAvx2Kernels(true);
+  const ProjectionTable narrow(referenceGrid(Resolution::k16mm), rig.cameras, o);
+  forceAvx2Kernels(false);
+  for (size_t r = 0; r < wide.grid().numRows(); ++r) {
+    const uint32_t* a = wide.rowCentres(r, nullptr);
+    const uint32_t* b = narrow.rowCentres(r, nullptr);
+    ASSERT_EQ(0, std::memcmp(a, b, wide.centreScratchSize() * sizeof(uint32_t))) << "row " << r;
+  }
 }
 
 TEST(PsfsFusion, HandSubVolumeOnTheFlyEqualsPrecomputed) {
