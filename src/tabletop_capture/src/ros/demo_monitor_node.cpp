@@ -109,6 +109,8 @@ class DemoMonitor {
     auto g = truth_msgs_.find(stamp);
     if (t == tracked_.end() || g == truth_msgs_.end()) return;
     tracking_.add(stamp.toSec(), toTrackedPoints(*t->second), toTruthPoints(*g->second));
+    scored_tracked_[stamp] = t->second;  // for the contact sheet
+    while (scored_tracked_.size() > 100) scored_tracked_.erase(scored_tracked_.begin());
     tracked_.erase(t);
   }
 
@@ -363,9 +365,11 @@ class DemoMonitor {
     const int cols = std::max(1, std::min<int>(columns_, n));
     const int rows = (n + cols - 1) / cols;
     cv::Mat sheet(rows * cell_h, cols * cell_w, CV_8UC3, cv::Scalar(40, 40, 40));
-    tabletop_msgs::TrackedTargets::ConstPtr truth;
+    tabletop_msgs::TrackedTargets::ConstPtr truth, tracked;
     auto it = truth_msgs_.find(f.header.stamp);
     if (it != truth_msgs_.end()) truth = it->second;
+    auto tr = scored_tracked_.find(f.header.stamp);
+    if (tr != scored_tracked_.end()) tracked = tr->second;
     for (size_t i = 0; i < n; ++i) {
       const auto& im = f.images[i];
       if (im.encoding != "rgb8" || im.data.size() < size_t(im.step) * im.height) continue;
@@ -375,31 +379,42 @@ class DemoMonitor {
       const std::string name = i < f.camera_names.size() ? f.camera_names[i] : std::to_string(i);
       cv::putText(cell, name, cv::Point(5, 15), cv::FONT_HERSHEY_SIMPLEX, 0.45,
                   cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-      // Ground truth projected with the frame's own calibration: a visual check that images,
-      // camera_info and tf agree (crosses land on the hands and the head).
+      // Ground truth projected with the frame's own calibration as crosses (a visual check that
+      // images, camera_info and tf agree: they land on the hands and the head), the tracker's
+      // targets as circles.
       CameraModel cam;
-      if (truth && i < f.camera_infos.size() && i < f.camera_poses.size() &&
+      if (i < f.camera_infos.size() && i < f.camera_poses.size() &&
           fromCameraInfo(f.camera_infos[i], &cam, nullptr) &&
           fromTransform(f.camera_poses[i], &cam.world_T_camera)) {
-        for (const auto& t : truth->targets) {
-          if (!t.active) continue;
-          Eigen::Vector2d px;
-          if (!cam.projectWorld(Eigen::Vector3d(t.position.x, t.position.y, t.position.z), &px))
-            continue;
-          const cv::Scalar colour = t.type == tabletop_msgs::TrackedTarget::HEAD
-                                        ? cv::Scalar(255, 200, 0)
-                                        : cv::Scalar(0, 255, 0);
-          cv::drawMarker(cell, cv::Point(std::lround(px.x()), std::lround(px.y())), colour,
-                         cv::MARKER_CROSS, 10, 1);
-        }
+        auto draw = [&](const tabletop_msgs::TrackedTargets::ConstPtr& targets, bool is_truth) {
+          if (!targets) return;
+          for (const auto& t : targets->targets) {
+            Eigen::Vector2d px;
+            if (!t.active ||
+                !cam.projectWorld(Eigen::Vector3d(t.position.x, t.position.y, t.position.z), &px))
+              continue;
+            const bool head = t.type == tabletop_msgs::TrackedTarget::HEAD;
+            const cv::Point at(std::lround(px.x()), std::lround(px.y()));
+            if (is_truth)
+              cv::drawMarker(cell, at, head ? cv::Scalar(255, 200, 0) : cv::Scalar(0, 255, 0),
+                             cv::MARKER_CROSS, 10, 1);
+            else
+              cv::circle(cell, at, 7, head ? cv::Scalar(255, 0, 255) : cv::Scalar(0, 140, 255), 1,
+                         cv::LINE_AA);
+          }
+        };
+        draw(truth, true);
+        draw(tracked, false);
       }
     }
+    cv::putText(sheet, "+ ground truth   o tracked", cv::Point(5, sheet.rows - 6),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     return cv::imwrite(path, sheet);
   }
 
   ros::NodeHandle nh_, pnh_;
   ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_;
-  std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked_;
+  std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked_, scored_tracked_;
   sim::TrackingEvaluator tracking_;
   ros::WallTimer timer_;
   std::mutex mutex_;
