@@ -231,7 +231,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
     cameras_off_ = 0;
     for (bool a : r.camera_active) cameras_off_ += !a;
-    publish(*msg, r);
+    publish(*msg, r, rois);
     const StageTimes& t = r.times;
     classify_ms_.add(t.classify);
     evidence_ms_.add(t.evidence);
@@ -243,7 +243,9 @@ class PsfsNodelet : public nodelet::Nodelet {
     ++reconstructed_;
   }
 
-  void publish(const tabletop_msgs::MultiViewFrame& f, const FrameResult& r) {
+  // rois: the ROIs the hand volumes were computed for (their ids label the volumes).
+  void publish(const tabletop_msgs::MultiViewFrame& f, const FrameResult& r,
+               const std::vector<std::pair<uint32_t, Eigen::Vector3d>>& rois) {
     const ros::Time stamp = f.header.stamp;
     auto body = boost::make_shared<tabletop_msgs::VoxelVolume>();
     toVoxelVolumeMsg(r.body, stamp, world_frame_, body.get());
@@ -255,9 +257,8 @@ class PsfsNodelet : public nodelet::Nodelet {
       auto hands = boost::make_shared<tabletop_msgs::HandVolumes>();
       hands->header.stamp = stamp;
       hands->header.frame_id = world_frame_;
-      const auto rois = currentRois(stamp);
       for (size_t h = 0; h < r.hands.size(); ++h) {
-        hands->target_ids.push_back(h < rois.size() ? rois[h].first : 0);
+        hands->target_ids.push_back(rois[h].first);
         hands->volumes.emplace_back();
         toVoxelVolumeMsg(r.hands[h], stamp, world_frame_, &hands->volumes.back());
       }
