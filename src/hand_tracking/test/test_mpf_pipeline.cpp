@@ -19,6 +19,7 @@
 #include <tabletop_msgs/VoxelVolume.h>
 
 #include "tabletop_capture/ros/sim_truth_msgs.h"
+#include "tabletop_capture/ros/test_support.h"
 #include "tabletop_capture/sim/tracking_evaluator.h"
 
 namespace {
@@ -27,18 +28,9 @@ namespace sim = tabletop_capture::sim;
 constexpr int kFrames = 125;  // 25 empty + 100 with the person (4 s of reaching)
 constexpr int kEmpty = 25;
 
-bool waitFor(const std::function<bool()>& cond, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::WallTime::now() < end && !cond()) ros::WallDuration(0.02).sleep();
-  return cond();
-}
-
-// Never destroyed: class_loader throws from the loader's destructor at exit when plugins of
-// several libraries were loaded; main() unloads the nodelets before roscpp shuts down.
-nodelet::Loader& loader() {
-  static nodelet::Loader* l = new nodelet::Loader(false);
-  return *l;
-}
+using tabletop_capture::test_support::loadNodelet;
+using tabletop_capture::test_support::loader;
+using tabletop_capture::test_support::waitFor;
 
 }  // namespace
 
@@ -84,12 +76,10 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
 
-  const nodelet::M_string remap;
-  const nodelet::V_string argv;
-  ASSERT_TRUE(loader().load("/tabletop/mpf", "hand_tracking/Mpf", remap, argv));
-  ASSERT_TRUE(loader().load("/tabletop/psfs", "psfs_reconstruction/Psfs", remap, argv));
-  ASSERT_TRUE(loader().load("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer", remap, argv));
-  ASSERT_TRUE(loader().load("/tabletop/sim_rig", "tabletop_capture/SimRig", remap, argv));
+  ASSERT_TRUE(loadNodelet("/tabletop/mpf", "hand_tracking/Mpf"));
+  ASSERT_TRUE(loadNodelet("/tabletop/psfs", "psfs_reconstruction/Psfs"));
+  ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
+  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
 
   ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return truth.size() >= size_t(kFrames); }, 90.0));
   ros::WallDuration(2.5).sleep();  // last targets and a diagnostics round

@@ -23,6 +23,7 @@
 #include <tabletop_msgs/VoxelVolume.h>
 
 #include "psfs_reconstruction/ros/volume_msgs.h"
+#include "tabletop_capture/ros/test_support.h"
 #include "tabletop_capture/sim/simulated_rig.h"
 
 namespace {
@@ -32,22 +33,9 @@ namespace sim = tabletop_capture::sim;
 constexpr int kFrames = 70;
 constexpr int kEmpty = 25;
 
-bool waitFor(const std::function<bool()>& cond, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::WallTime::now() < end) {
-    if (cond()) return true;
-    ros::WallDuration(0.02).sleep();
-  }
-  return cond();
-}
-
-// Never destroyed: with plugins from two libraries loaded, class_loader throws
-// LibraryUnloadException from the loader's destructor at process exit (after the tests passed).
-// loader().clear() in main() unloads the nodelets themselves before roscpp shuts down.
-nodelet::Loader& loader() {
-  static nodelet::Loader* l = new nodelet::Loader(false);
-  return *l;
-}
+using tabletop_capture::test_support::loadNodelet;
+using tabletop_capture::test_support::loader;
+using tabletop_capture::test_support::waitFor;
 
 }  // namespace
 
@@ -114,11 +102,9 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   auto s5 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 200, on_truth);
   auto s6 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
 
-  const nodelet::M_string remap;
-  const nodelet::V_string argv;
-  ASSERT_TRUE(loader().load("/tabletop/psfs", "psfs_reconstruction/Psfs", remap, argv));
-  ASSERT_TRUE(loader().load("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer", remap, argv));
-  ASSERT_TRUE(loader().load("/tabletop/sim_rig", "tabletop_capture/SimRig", remap, argv));
+  ASSERT_TRUE(loadNodelet("/tabletop/psfs", "psfs_reconstruction/Psfs"));
+  ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
+  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
 
   ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return frame_stamps.size() >= size_t(kFrames); }, 90.0));
   ros::WallDuration(2.5).sleep();  // last volumes and a diagnostics round

@@ -21,6 +21,7 @@
 
 #include "tabletop_capture/ros/conversions.h"
 #include "tabletop_capture/ros/published_frames.h"
+#include "tabletop_capture/ros/test_support.h"
 #include "tabletop_capture/sim/default_rig.h"
 
 using namespace tabletop_capture;
@@ -54,30 +55,19 @@ struct FrameLog {
   }
 };
 
-bool waitFor(const std::function<bool()>& cond, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::WallTime::now() < end) {
-    if (cond()) return true;
-    ros::WallDuration(0.01).sleep();
-  }
-  return cond();
-}
+using test_support::waitFor;
 
 }  // namespace
 
 class PipelineTest : public ::testing::Test {
  protected:
-  static nodelet::Loader& loader() {
-    static nodelet::Loader l(false);
-    return l;
-  }
   static bool load(const std::string& name, const std::string& type) {
-    return loader().load(name, type, nodelet::M_string(), nodelet::V_string());
+    return test_support::loadNodelet(name, type);
   }
 
  public:
   // Unloads every nodelet before roscpp shuts down (avoids the ROS 1 teardown race).
-  static void unloadAll() { loader().clear(); }
+  static void unloadAll() { test_support::loader().clear(); }
 };
 
 TEST_F(PipelineTest, SimRigSynchroniserRateZeroCopyAndBagRoundTrip) {
