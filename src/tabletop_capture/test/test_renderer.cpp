@@ -11,6 +11,7 @@
 #include "tabletop_capture/sim/motion_script.h"
 #include "tabletop_capture/sim/oracle.h"
 #include "tabletop_capture/sim/renderer.h"
+#include "tabletop_capture/sim/scene.h"
 #include "tabletop_capture/sim/simulated_rig.h"
 
 using namespace tabletop_capture;
@@ -332,6 +333,37 @@ TEST(SimScripts, HandsReachableAndHumanSpeed) {
   EXPECT_LT(worst_residual, 0.005);
   EXPECT_LE(max_reach, BodyModel::kUpperArm + BodyModel::kForearm + 1e-9);
   EXPECT_LE(max_speed, 1.5);
+}
+
+// Hands over the desk rest on it: no hand primitive reaches below the desk top in any script
+// (the truth would otherwise hold volume no camera sees), and the lift that guarantees this
+// stays small (the scripts' palm heights are plausible to begin with).
+TEST(SimScripts, HandsNeverSinkIntoTheDesk) {
+  const BodyModel model;
+  const MotionScript script = MotionScript::create("all", model);
+  const DeskTop desk;
+  double lowest = 1.0, max_lift = 0.0;
+  int on_desk = 0;
+  for (double t = 0.0; t <= script.duration(); t += 0.04) {
+    const BodyPose pose = script.poseAt(t);
+    const std::vector<Primitive> prims = model.build(pose);
+    for (Side side : {Side::LEFT, Side::RIGHT}) {
+      const Vector3d palm = model.palmCentre(pose, side);
+      if (palm.x() < desk.x_min || palm.x() > desk.x_max || palm.y() < desk.y_min ||
+          palm.y() > desk.y_max || palm.z() < -0.02)
+        continue;  // off the desk (e.g. in the lap): no contact
+      ++on_desk;
+      for (const Primitive& p : prims)
+        if (p.part == handPart(side)) lowest = std::min(lowest, p.bounds().min().z());
+      max_lift = std::max(max_lift, script.palmTarget(t, side).z() - script.keyAt(t).arms[int(side)].palm.z());
+    }
+  }
+  std::printf("[ figures ] all script: %d hand-frames over the desk, lowest hand point %.2f mm "
+              "above the desk top, largest palm lift %.1f mm\n",
+              on_desk, 1e3 * lowest, 1e3 * max_lift);
+  EXPECT_GT(on_desk, 1000);
+  EXPECT_GE(lowest, 0.0);
+  EXPECT_LT(max_lift, 0.06);
 }
 
 TEST(SimScripts, NamesLoopingAndRestPose) {

@@ -317,6 +317,12 @@ ArmSolution BodyModel::poseArm(BodyPose* pose, Side side, const Vector3d& target
   return sol;
 }
 
+HandPose BodyModel::relaxedHand() {
+  HandPose h = HandPose::preset(HandShape::OPEN);
+  h.curl = {{0.0, 0.09, 0.08, 0.09, 0.12}};  // what a quarter-closed hand keeps on a flat desk
+  return h;
+}
+
 BodyPose BodyModel::restPose() {
   BodyPose p;
   p.state[dof::TORSO_X] = 0.0;
@@ -327,12 +333,11 @@ BodyPose BodyModel::restPose() {
   for (Side side : {Side::LEFT, Side::RIGHT}) {
     const double sx = sideSign(side);
     HandPose& h = p.hands[idx(side)];
-    h = blend(HandPose::preset(HandShape::OPEN), HandPose::preset(HandShape::FIST), 0.25);
-    h.shape = HandShape::OPEN;
+    h = relaxedHand();
     const BodyFrames f = model.forward(p);
     const Vector3d s = f.shoulder[idx(side)];
     const Vector3d pole = s + f.chest.linear() * Vector3d(sx * 0.6, -0.3, -0.75);
-    model.poseArm(&p, side, Vector3d(sx * 0.2, -0.25, 0.028), pole, Vector3d::UnitZ(), 0.0);
+    model.poseArm(&p, side, Vector3d(sx * 0.2, -0.25, kRestPalmHeight), pole, Vector3d::UnitZ(), 0.0);
   }
   return p;
 }

@@ -1,5 +1,7 @@
 #include "tabletop_capture/sim/motion_script.h"
 
+#include "tabletop_capture/sim/scene.h"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -24,11 +26,54 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 Vector3d mirror(const Vector3d& v) { return Vector3d(-v.x(), v.y(), v.z()); }
 
-HandPose relaxed() {
-  HandPose h = blend(HandPose::preset(HandShape::OPEN), HandPose::preset(HandShape::FIST), 0.25);
-  h.shape = HandShape::OPEN;
-  return h;
+// ---- desk contact (see the header) ----
+constexpr double kDeskClearance = 0.001;  // m between the lowest hand point and the desk top
+constexpr double kClosedCurl = 0.5;       // digits curled at least this much lift the hand
+constexpr int kCurlBisections = 10;       // curl resolution 1/1024 of the scripted curl
+constexpr int kLiftIterations = 4;
+
+double lowestOf(const std::vector<Primitive>& prims, size_t i) { return prims[i].bounds().min().z(); }
+
+double digitLowest(const std::vector<Primitive>& prims, size_t palm, int digit) {
+  return std::min(lowestOf(prims, palm + BodyModel::digitPrimitive(digit, 0)),
+                  lowestOf(prims, palm + BodyModel::digitPrimitive(digit, 1)));
 }
+
+size_t palmIndex(const std::vector<Primitive>& prims, Side side) {
+  for (size_t i = 0; i < prims.size(); ++i)
+    if (prims[i].part == handPart(side)) return i;
+  throw std::logic_error("MotionScript: body model built no hand");
+}
+
+bool overDesk(const Vector3d& palm) {
+  const DeskTop desk;
+  return palm.x() > desk.x_min && palm.x() < desk.x_max && palm.y() > desk.y_min &&
+         palm.y() < desk.y_max && palm.z() > -0.02;
+}
+
+// Straightens the open digits of `side` that dip below the clearance plane (largest curl that
+// clears it, by bisection), then returns the lowest point of the palm and all digits.
+double straightenOpenDigits(const BodyModel& model, BodyPose* pose, Side side,
+                            std::vector<Primitive>* prims) {
+  model.build(*pose, prims);
+  const size_t palm = palmIndex(*prims, side);
+  HandPose& hand = pose->hand(side);
+  for (int d = 0; d < 5; ++d) {
+    if (hand.curl[d] >= kClosedCurl || digitLowest(*prims, palm, d) >= kDeskClearance) continue;
+    double lo = 0.0, hi = hand.curl[d];
+    for (int i = 0; i < kCurlBisections; ++i) {
+      hand.curl[d] = 0.5 * (lo + hi);
+      model.build(*pose, prims);
+      (digitLowest(*prims, palm, d) >= kDeskClearance ? lo : hi) = hand.curl[d];
+    }
+    hand.curl[d] = lo;
+    model.build(*pose, prims);
+  }
+  double low = lowestOf(*prims, palm);
+  for (int d = 0; d < 5; ++d) low = std::min(low, digitLowest(*prims, palm, d));
+  return low;
+}
+
 
 // Appends keyframes; each new key starts as a copy of the previous one.
 struct Builder {
@@ -253,11 +298,11 @@ Keyframe MotionScript::restKey() {
   for (int side : {L, R}) {
     const double sx = side == R ? 1.0 : -1.0;
     ArmKey& a = k.arms[side];
-    a.palm = Vector3d(sx * 0.2, -0.25, 0.028);
+    a.palm = Vector3d(sx * 0.2, -0.25, BodyModel::kRestPalmHeight);
     a.pole = Vector3d(sx * 0.6, -0.3, -0.75);
     a.dorsal = Vector3d::UnitZ();
     a.finger_elevation = 0.0;
-    a.hand = relaxed();
+    a.hand = BodyModel::relaxedHand();
   }
   return k;
 }
@@ -341,7 +386,13 @@ Keyframe MotionScript::keyAt(double t) const {
 
 BodyPose MotionScript::poseAt(double t) const { return poseFromKey(keyAt(t)); }
 
-BodyPose MotionScript::poseFromKey(const Keyframe& k) const {
+Vector3d MotionScript::palmTarget(double t, Side side) const {
+  Vector3d targets[2];
+  poseFromKey(keyAt(t), targets);
+  return targets[static_cast<int>(side)];
+}
+
+BodyPose MotionScript::poseFromKey(const Keyframe& k, Vector3d* palm_targets) const {
   const double t = k.time;
   BodyPose pose;
   for (int i = 0; i < 8; ++i) pose.state[i] = k.trunk[i];
@@ -361,7 +412,16 @@ BodyPose MotionScript::poseFromKey(const Keyframe& k) const {
     const BodyFrames f = model_.forward(pose);
     const Vector3d s = f.shoulder[static_cast<int>(side)];
     const Vector3d pole = s + 0.5 * (f.chest.linear() * a.pole.normalized());
-    model_.poseArm(&pose, side, a.palm, pole, a.dorsal, a.finger_elevation);
+    Vector3d target = a.palm;
+    model_.poseArm(&pose, side, target, pole, a.dorsal, a.finger_elevation);
+    std::vector<Primitive> prims;
+    for (int i = 0; i < kLiftIterations && overDesk(model_.palmCentre(pose, side)); ++i) {
+      const double low = straightenOpenDigits(model_, &pose, side, &prims);
+      if (low >= kDeskClearance - 1e-4) break;
+      target.z() += kDeskClearance - low;
+      model_.poseArm(&pose, side, target, pole, a.dorsal, a.finger_elevation);
+    }
+    if (palm_targets) palm_targets[static_cast<int>(side)] = target;
   }
   return pose;
 }

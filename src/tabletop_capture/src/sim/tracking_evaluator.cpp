@@ -97,6 +97,7 @@ void TrackingEvaluator::add(double time, const std::vector<TrackedPoint>& tracke
     if (b.bound && track) {
       const double err = 1e3 * (track->position - truth_pos).norm();
       r.error_mm.add(err);
+      r.bias_sum_mm += 1e3 * (track->position - truth_pos);
       ++r.tracked_frames;
       series_mm_[t].push_back(err);
     } else {
@@ -127,9 +128,10 @@ std::string TrackingEvaluator::summary() const {
     } else {
       std::snprintf(buf, sizeof(buf),
                     "  %-10s  error mean %.1f mm, std %.1f, max %.1f | tracked %d/%d frames | "
-                    "losses %d, identity switches %d",
+                    "losses %d, identity switches %d | bias (%+.1f, %+.1f, %+.1f) mm",
                     targetName(t), r.error_mm.mean(), r.error_mm.stddev(), r.error_mm.max(),
-                    r.tracked_frames, r.visible_frames, r.losses, r.identity_switches);
+                    r.tracked_frames, r.visible_frames, r.losses, r.identity_switches, r.biasMm().x(),
+                    r.biasMm().y(), r.biasMm().z());
       s += buf;
       if (r.acquisition_delay_s.count() > 0) {
         std::snprintf(buf, sizeof(buf), " | acquired after %.2f s (max %.2f; %d acquisitions)",

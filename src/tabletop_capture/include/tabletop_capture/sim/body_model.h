@@ -123,11 +123,24 @@ class BodyModel {
   // Seated upright, hands resting palm-down on the desk near the body, head about
   // (0, -0.42, 0.57) (the figures in the header of DESIGN.md's world description).
   static BodyPose restPose();
+  // The resting hands: relaxed (fingers slightly curled, thumb straight), lying on the desk top
+  // with the palm centre kRestPalmHeight above it and nothing below the desk (motion scripts'
+  // desk contact leaves this pose unchanged).
+  static HandPose relaxedHand();
+  static constexpr double kRestPalmHeight = 0.0325;
 
   BodyFrames forward(const BodyPose& pose) const;
   // The person as solid primitives (about 50), in world coordinates.
   std::vector<Primitive> build(const BodyPose& pose) const;
   void build(const BodyPose& pose, std::vector<Primitive>* out) const;
+
+  // A hand's primitives in build() order, counted from its palm ellipsoid: two capsules per
+  // finger (index .. little), then two for the thumb. Digit d as in HandPose::curl (0 = thumb),
+  // segment 0 = proximal, 1 = distal.
+  static constexpr int kHandPrimitives = 11;
+  static constexpr int digitPrimitive(int digit, int segment) {
+    return digit == 0 ? 9 + segment : 1 + 2 * (digit - 1) + segment;
+  }
 
   Eigen::Vector3d palmCentre(const BodyPose& pose, Side side) const;
   Eigen::Vector3d headCentre(const BodyPose& pose) const;

@@ -5,6 +5,13 @@
 // mean), and the arm angles come from the body model's IK at every instant. Every script
 // starts and ends in BodyModel::restPose(), so scripts concatenate and loop without jumps.
 //
+// Hands over the desk rest ON it: the keyframes place palm centres by eye, and curled fingers,
+// a fist or a pointing finger reach below the palm. At every instant, open digits (curl < 0.5)
+// that would sink into the desk top are straightened just enough (fingers pressed flat on a
+// table), and if the palm, a closed digit or a straight one still reaches below the desk top
+// the whole hand is lifted (the palm target raised, the arm solved again). Without this the
+// ground truth would include hand volume inside the desk that no camera can see.
+//
 // Names: wave, point, fold_hands, reach_targets, leave_reenter, head_turn, static, all
 // (all = the others in that order).
 #pragma once
@@ -56,10 +63,12 @@ class MotionScript {
   Keyframe keyAt(double t) const;
   // The full body pose at time t (IK applied). Deterministic and thread-safe.
   BodyPose poseAt(double t) const;
-  // Where the script wants the palm centre at time t (to check that IK reaches it).
-  Eigen::Vector3d palmTarget(double t, Side side) const { return keyAt(t).arms[int(side)].palm; }
-  // The body pose a (possibly interpolated) keyframe describes at its time (IK applied).
-  BodyPose poseFromKey(const Keyframe& key) const;
+  // Where the script wants the palm centre at time t, after the desk lift (to check that IK
+  // reaches it).
+  Eigen::Vector3d palmTarget(double t, Side side) const;
+  // The body pose a (possibly interpolated) keyframe describes at its time (IK and desk
+  // contact applied). palm_targets (optional): the palm targets after the desk lift.
+  BodyPose poseFromKey(const Keyframe& key, Eigen::Vector3d* palm_targets = nullptr) const;
 
  private:
   std::string name_;

@@ -55,6 +55,12 @@ class TrackingEvaluator {
 
   struct TargetReport {
     RunningStats error_mm;        // over frames where the target is visible and tracked
+    // Mean signed error (tracked - truth, world axes, mm) over the same frames: a bias that
+    // the mean distance hides (e.g. a systematic offset of the reconstruction).
+    Eigen::Vector3d bias_sum_mm = Eigen::Vector3d::Zero();
+    Eigen::Vector3d biasMm() const {
+      return error_mm.count() ? Eigen::Vector3d(bias_sum_mm / error_mm.count()) : Eigen::Vector3d::Zero();
+    }
     int visible_frames = 0, tracked_frames = 0;
     int losses = 0;               // bound track died (or went inactive) while visible
     int identity_switches = 0;
