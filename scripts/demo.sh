@@ -18,6 +18,7 @@ Usage: scripts/demo.sh [options] [extra roslaunch arg:=value ...]
   --short-sleeves   bare forearms
   --rviz            also open rviz (under Xvfb with a screenshot in the output folder when
                     there is no $DISPLAY)
+  --no-mesh-eval    skip the hand-mesh accuracy run after the pipeline (mesh_eval)
   -h, --help        this text
 Any NAME:=VALUE is passed to launch/demo.launch (see its argument docs).
 USAGE
@@ -26,6 +27,7 @@ USAGE
 FRAMES=300
 OUT="$PWD/output"
 RVIZ=false
+MESH_EVAL=true
 EXTRA=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -37,6 +39,7 @@ while [ $# -gt 0 ]; do
     --bayer) EXTRA+=("bayer:=$2"); shift 2 ;;
     --short-sleeves) EXTRA+=("short_sleeves:=true"); shift ;;
     --rviz) RVIZ=true; shift ;;
+    --no-mesh-eval) MESH_EVAL=false; shift ;;
     -h|--help) usage; exit 0 ;;
     *:=*) EXTRA+=("$1"); shift ;;
     *) echo "demo: unknown option '$1'" >&2; usage >&2; exit 2 ;;
@@ -75,6 +78,14 @@ roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" monitor:=true frames:="$FRAM
   sed -u 's/\x1b\[[0-9;]*m//g; s/\x1b\]2;[^\x07]*\x07//g' |
   grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()|REQUIRED process|process has finished cleanly|^log file:|Initiating shutdown|killing on exit|shutting down processing monitor|^.{0,8}done.{0,8}$|Loading nodelet|waitForService|Unloading nodelet|Initializing nodelet|Press Ctrl-C|^\.\.\. logging|^.\]2;'
 rc=${PIPESTATUS[0]}
+if [ "$rc" -eq 0 ] && [ "$MESH_EVAL" = true ]; then
+  # Hand-mesh accuracy against the simulated truth and a picture of both hands' meshes: the
+  # same reconstruction and meshing code as the pipeline, on 4 s of reach_targets.
+  echo "[demo] scoring hand meshes against the true hand surface (mesh_eval, ~10 s)"
+  "$ROOT/devel/lib/cvephands_bridge/mesh_eval" --script reach_targets --frames 100 --every 20 \
+    --out "$OUT" 2>/dev/null | tee -a "$OUT/summary.txt"
+  rc=${PIPESTATUS[0]}
+fi
 set -e
 echo "[demo] files in $OUT: $(cd "$OUT" && ls -1 | grep -v ros_log | tr '\n' ' ')"
 exit "$rc"

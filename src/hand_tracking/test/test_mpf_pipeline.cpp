@@ -1,5 +1,5 @@
 // Integration test of the Mpf nodelet in the full pipeline: simulated rig -> synchroniser ->
-// psfs -> mpf in one nodelet manager (this process). Checks that hands/targets follows the
+// psfs -> mpf -> hand mesher in one nodelet manager (this process). Checks that hands/targets follows the
 // simulated person (errors against ground_truth/targets, same stamps), that the pSfS nodelet
 // closes the loop with hand sub-volumes for the tracked hands' ids, that tf carries the targets,
 // and that a malformed volume is rejected and counted without stopping the tracker.
@@ -14,6 +14,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <tabletop_msgs/HandMeshes.h>
 #include <tabletop_msgs/HandVolumes.h>
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
@@ -46,6 +47,7 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   std::mutex m;
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked, truth;
   std::map<ros::Time, tabletop_msgs::HandVolumes::ConstPtr> hand_volumes;
+  std::map<ros::Time, tabletop_msgs::HandMeshes::ConstPtr> hand_meshes;
   std::map<std::string, std::string> diag;
   boost::function<void(const tabletop_msgs::TrackedTargets::ConstPtr&)> on_tracked =
       [&](const tabletop_msgs::TrackedTargets::ConstPtr& t) {
@@ -62,6 +64,11 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
         std::lock_guard<std::mutex> l(m);
         hand_volumes[h->header.stamp] = h;
       };
+  boost::function<void(const tabletop_msgs::HandMeshes::ConstPtr&)> on_meshes =
+      [&](const tabletop_msgs::HandMeshes::ConstPtr& h) {
+        std::lock_guard<std::mutex> l(m);
+        hand_meshes[h->header.stamp] = h;
+      };
   boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)> on_diag =
       [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
         std::lock_guard<std::mutex> l(m);
@@ -73,9 +80,11 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   auto s2 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 300, on_truth);
   auto s3 = nh.subscribe<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 300, on_hands);
   auto s4 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
+  auto s5 = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 300, on_meshes);
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
 
+  ASSERT_TRUE(loadNodelet("/tabletop/hand_mesher", "cvephands_bridge/HandMesher"));
   ASSERT_TRUE(loadNodelet("/tabletop/mpf", "hand_tracking/Mpf"));
   ASSERT_TRUE(loadNodelet("/tabletop/psfs", "psfs_reconstruction/Psfs"));
   ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
@@ -119,6 +128,23 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   EXPECT_GT(hand_volumes.size(), tracked.size() / 2);
   // ROIs come from the previous frame's targets (ids rarely change between frames).
   EXPECT_GT(matched, hand_volumes.size());
+  // The mesher turned every hand sub-volume set into meshes with the same ids, each a hand-sized
+  // surface (thousands of triangles at 3.6 mm).
+  size_t mesh_sets = 0, meshes_ok = 0, volumes_total = 0;
+  for (const auto& h : hand_volumes) {
+    volumes_total += h.second->volumes.size();
+    auto x = hand_meshes.find(h.first);
+    if (x == hand_meshes.end()) continue;
+    ++mesh_sets;
+    for (size_t i = 0; i < x->second->meshes.size(); ++i)
+      meshes_ok += i < h.second->target_ids.size() &&
+                   x->second->meshes[i].target_id == h.second->target_ids[i] &&
+                   x->second->meshes[i].triangles.size() / 3 > 1000;
+  }
+  std::printf("[mpf] %zu hand mesh sets for %zu volume sets; %zu of %zu meshes with matching ids "
+              "and > 1000 triangles\n", mesh_sets, hand_volumes.size(), meshes_ok, volumes_total);
+  EXPECT_GE(mesh_sets + 3, hand_volumes.size());
+  EXPECT_GE(meshes_ok + 6, volumes_total);
   // tf of the head.
   EXPECT_TRUE(tf_buffer.canTransform("world", "head", ros::Time(0)));
   ASSERT_TRUE(diag.count("volumes rejected"));

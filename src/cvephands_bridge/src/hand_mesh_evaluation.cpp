@@ -1,0 +1,197 @@
+#include "cvephands_bridge/hand_mesh_evaluation.h"
+
+#include <array>
+#include <chrono>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "cvephands_bridge/mesh_components.h"
+#include "psfs_reconstruction/gaussian_mixture.h"
+#include "psfs_reconstruction/reconstructor.h"
+#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_capture/sim/surface_samples.h"
+
+namespace cvephands {
+namespace {
+
+namespace sim = tabletop_capture::sim;
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+ProbabilityGridView viewOf(const psfs::ProbabilityVolume& v) {
+  ProbabilityGridView g;
+  g.data = v.data.data();
+  g.dims = v.grid.dims;
+  g.origin = v.grid.origin;
+  g.voxel_size = v.grid.voxel_size;
+  return g;
+}
+
+// The triangles whose three vertices lie inside `inner` (vertices kept as they are).
+TriangleMesh insidePart(const TriangleMesh& m, const Eigen::AlignedBox3d& inner) {
+  TriangleMesh out;
+  out.vertices = m.vertices;
+  for (size_t t = 0; t + 2 < m.triangles.size(); t += 3) {
+    bool in = true;
+    for (int k = 0; k < 3; ++k) in = in && inner.contains(m.vertices[m.triangles[t + k]].cast<double>());
+    if (in) out.triangles.insert(out.triangles.end(), m.triangles.begin() + t, m.triangles.begin() + t + 3);
+  }
+  return out;
+}
+
+// mesh -> truth from the mesh's inner part against all samples; truth -> mesh from the inner
+// samples against the whole mesh (so neither side is penalised for the other's cut).
+MeshAccuracy score(const TriangleMesh& mesh, const sim::SurfaceSamples& truth,
+                   const Eigen::AlignedBox3d& inner) {
+  std::vector<Eigen::Vector3f> inner_truth;
+  for (const Eigen::Vector3f& p : truth.points)
+    if (inner.contains(p.cast<double>())) inner_truth.push_back(p);
+  MeshAccuracy a;
+  a.mesh_to_truth = meshAccuracy(insidePart(mesh, inner), truth.points).mesh_to_truth;
+  a.truth_to_mesh = meshAccuracy(mesh, inner_truth).truth_to_mesh;
+  return a;
+}
+
+void addStats(const MeshAccuracy& a, tabletop_capture::RunningStats* m2t,
+              tabletop_capture::RunningStats* t2m, tabletop_capture::RunningStats* p95m2t,
+              tabletop_capture::RunningStats* p95t2m) {
+  if (a.mesh_to_truth.count) m2t->add(a.mesh_to_truth.mean_mm), p95m2t->add(a.mesh_to_truth.p95_mm);
+  if (a.truth_to_mesh.count) t2m->add(a.truth_to_mesh.mean_mm), p95t2m->add(a.truth_to_mesh.p95_mm);
+}
+
+}  // namespace
+
+HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
+  if (o.every < 1) throw std::invalid_argument("evaluateHandMeshes: every must be >= 1");
+  if (o.frames < 0) throw std::invalid_argument("evaluateHandMeshes: frames must be >= 0");
+  if (!(o.iso > 0.0 && o.iso < 1.0)) throw std::invalid_argument("evaluateHandMeshes: iso in (0, 1)");
+  if (!(o.border_voxels >= 0.0)) throw std::invalid_argument("evaluateHandMeshes: border_voxels < 0");
+  sim::SimOptions so;
+  so.script = o.script;
+  so.seed = static_cast<uint64_t>(o.seed);
+  so.num_cameras = o.cameras;
+  sim::SimulatedRig rig(so);
+  psfs::ReconstructorParams rp;
+  rp.hand_roi_edge = o.hand_edge;
+  rp.hand_roi_voxels = o.hand_voxels;
+  psfs::Reconstructor recon(psfs::GaussianMixture2D::load(o.skin_model), rp);
+
+  MarchingCubesOptions mo;
+  mo.iso = static_cast<float>(std::floor(255.0 * o.iso) + 0.5);
+  mo.threads = 1;
+  MarchingCubes prob(mo);
+  mo.mode = MeshingMode::kBinary;
+  MarchingCubes binary(mo);
+  sim::SurfaceSampleOptions sso;
+  sso.spacing = o.spacing;
+  sso.seed = static_cast<uint32_t>(o.seed);
+  // The skin hull ends where the sleeve begins: that cuff face is part of what the mesh should
+  // show (the box cuts are handled by the border band instead).
+  sso.clothing_interface = true;
+
+  const int total = o.frames > 0 ? so.empty_frames + o.frames : rig.scriptFrames();
+  const int scored_total = (total - so.empty_frames + o.every - 1) / o.every;
+  HandMeshEvalResult r;
+  std::vector<int> both_frames;
+  std::vector<std::array<TriangleMesh, 4>> both_meshes;  // kept only for the picture
+  for (int f = 0; f < total; ++f) {
+    const bool scored = f >= so.empty_frames && (f - so.empty_frames) % o.every == 0;
+    if (!scored && f >= so.empty_frames) continue;  // the background is learned; others skipped
+    const sim::SimFrame frame = rig.render(f);
+    std::vector<Eigen::Vector3d> rois;
+    std::vector<int> sides;
+    if (frame.truth.person_present) {
+      if (frame.truth.left_hand_in_workspace) rois.push_back(frame.truth.left_hand), sides.push_back(0);
+      if (frame.truth.right_hand_in_workspace) rois.push_back(frame.truth.right_hand), sides.push_back(1);
+    }
+    const psfs::FrameResult res = recon.process(frame.images, rig.rig().cameras, rois);
+    if (!scored || res.status != psfs::FrameResult::Status::kReconstructed) continue;
+    ++r.frames_scored;
+    const std::vector<sim::Primitive> person = rig.person(f);
+    TriangleMesh meshes[2][2];  // [mode][side]
+    bool meshed[2] = {false, false};
+    for (size_t h = 0; h < rois.size(); ++h) {
+      const psfs::ProbabilityVolume& vol = res.hands[h];
+      const ProbabilityGridView g = viewOf(vol);
+      HandMeshSample s;
+      s.frame = f;
+      s.side = sides[h];
+      TriangleMesh& pm = meshes[0][s.side];
+      TriangleMesh& bm = meshes[1][s.side];
+      auto t0 = std::chrono::steady_clock::now();
+      prob.extract(g, &pm);
+      removeSmallComponents(&pm, size_t(std::max(0, o.min_component_triangles)));
+      s.mesh_ms_probabilistic = msSince(t0);
+      t0 = std::chrono::steady_clock::now();
+      binary.extract(g, &bm);
+      removeSmallComponents(&bm, size_t(std::max(0, o.min_component_triangles)));
+      s.mesh_ms_binary = msSince(t0);
+      s.triangles_probabilistic = pm.numTriangles();
+      s.triangles_binary = bm.numTriangles();
+      meshed[s.side] = !pm.empty();
+      const Eigen::AlignedBox3d box(vol.grid.origin, vol.grid.maxCorner());
+      const Eigen::Vector3d band = Eigen::Vector3d::Constant(o.border_voxels * vol.grid.voxel_size);
+      const Eigen::AlignedBox3d inner(box.min() + band, box.max() - band);
+      const sim::SurfaceSamples truth = sim::sampleSkinSurface(person, box, sso);
+      s.truth_area_m2 = truth.area;
+      s.probabilistic = score(pm, truth, inner);
+      s.binary = score(bm, truth, inner);
+      addStats(s.probabilistic, &r.prob_mesh_to_truth, &r.prob_truth_to_mesh,
+               &r.prob_p95_mesh_to_truth, &r.prob_p95_truth_to_mesh);
+      addStats(s.binary, &r.bin_mesh_to_truth, &r.bin_truth_to_mesh, &r.bin_p95_mesh_to_truth,
+               &r.bin_p95_truth_to_mesh);
+      r.prob_triangles.add(double(s.triangles_probabilistic));
+      r.bin_triangles.add(double(s.triangles_binary));
+      r.prob_ms.add(s.mesh_ms_probabilistic);
+      r.bin_ms.add(s.mesh_ms_binary);
+      r.samples.push_back(s);
+    }
+    if (sides.size() == 2) {
+      ++r.frames_both_hands;
+      r.frames_both_meshed += meshed[0] && meshed[1];
+      if (meshed[0] && meshed[1]) {
+        both_frames.push_back(f);
+        both_meshes.push_back({meshes[0][0], meshes[0][1], meshes[1][0], meshes[1][1]});
+      }
+    }
+    if (o.progress) o.progress(r.frames_scored, scored_total);
+  }
+  if (!both_frames.empty()) {
+    const size_t mid = both_frames.size() / 2;
+    r.picture_frame = both_frames[mid];
+    r.picture[0][0] = both_meshes[mid][0];
+    r.picture[0][1] = both_meshes[mid][1];
+    r.picture[1][0] = both_meshes[mid][2];
+    r.picture[1][1] = both_meshes[mid][3];
+  }
+  return r;
+}
+
+std::string HandMeshEvalResult::summary() const {
+  char buf[512];
+  std::string s;
+  std::snprintf(buf, sizeof(buf),
+                "%d frames scored, %zu hand meshes; both hands in %d frames, both meshed in %d\n",
+                frames_scored, samples.size(), frames_both_hands, frames_both_meshed);
+  s += buf;
+  s += "  variant        | mesh->truth mean / p95 (mm) | truth->mesh mean / p95 (mm) | triangles | ms per hand\n";
+  std::snprintf(buf, sizeof(buf),
+                "  probabilistic  | %6.2f / %6.2f             | %6.2f / %6.2f             | %9.0f | %.3f\n",
+                prob_mesh_to_truth.mean(), prob_p95_mesh_to_truth.mean(), prob_truth_to_mesh.mean(),
+                prob_p95_truth_to_mesh.mean(), prob_triangles.mean(), prob_ms.mean());
+  s += buf;
+  std::snprintf(buf, sizeof(buf),
+                "  binary         | %6.2f / %6.2f             | %6.2f / %6.2f             | %9.0f | %.3f\n",
+                bin_mesh_to_truth.mean(), bin_p95_mesh_to_truth.mean(), bin_truth_to_mesh.mean(),
+                bin_p95_truth_to_mesh.mean(), bin_triangles.mean(), bin_ms.mean());
+  s += buf;
+  s += "  (means over hands of each hand's mean and 95th percentile; mesh->truth: vertex to the\n"
+       "   nearest true-surface sample, truth->mesh: sample to the nearest mesh point)\n";
+  return s;
+}
+
+}  // namespace cvephands

@@ -1,0 +1,193 @@
+// HandMesher nodelet: psfs/hand_volumes (HandVolumes, one high-resolution skin sub-volume per
+// tracked hand) in; per hand a triangle mesh by marching cubes on the probability field (thesis
+// 6.5) out, as cve/hand_mesh_data (HandMeshes, for machines: the CVE bridge) and cve/hand_meshes
+// (MarkerArray: one TRIANGLE_LIST marker per hand id, deleted when that hand is no longer
+// meshed). A thin wrapper around cvephands::MarchingCubes.
+//
+// Private parameters: config/hand_mesher.yaml (loaded by the launch files) documents each.
+// Bad input (data size not matching the dims, non-finite geometry, ids and volumes of different
+// counts) is reported (throttled) and counted in the diagnostics; the other hands of the message
+// are still meshed.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <boost/make_shared.hpp>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <tabletop_msgs/HandMeshes.h>
+#include <tabletop_msgs/HandVolumes.h>
+
+#include "cvephands_bridge/marching_cubes.h"
+#include "cvephands_bridge/mesh_components.h"
+#include "cvephands_bridge/ros/mesh_conversions.h"
+#include "tabletop_capture/running_stats.h"
+
+namespace cvephands {
+
+class HandMesherNodelet : public nodelet::Nodelet {
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+    diag_->setHardwareID("hand_mesher");
+    diag_->add("hand meshing", this, &HandMesherNodelet::diagnose);
+    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
+      diag_->force_update();
+    };
+    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    try {
+      mc_ = std::make_unique<MarchingCubes>(loadOptions(pnh));
+    } catch (const std::exception& e) {
+      fatal_ = e.what();
+      NODELET_FATAL("hand_mesher: not started: bad parameters: %s", e.what());
+      return;
+    }
+    pnh.param("publish_markers", publish_markers_, true);
+    pnh.param("min_component_triangles", min_component_triangles_, 64);
+    pnh.param("world_frame", world_frame_, std::string("world"));
+    mesh_pub_ = nh.advertise<tabletop_msgs::HandMeshes>("cve/hand_mesh_data", 5);
+    marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("cve/hand_meshes", 2);
+    sub_ = nh.subscribe("psfs/hand_volumes", 2, &HandMesherNodelet::onVolumes, this);
+    NODELET_INFO("hand_mesher: %s -> %s + %s, iso %.1f/255, %s",
+                 sub_.getTopic().c_str(), mesh_pub_.getTopic().c_str(),
+                 marker_pub_.getTopic().c_str(), mc_->options().iso,
+                 mc_->options().mode == MeshingMode::kBinary ? "binary" : "probabilistic");
+  }
+
+  MarchingCubesOptions loadOptions(ros::NodeHandle& pnh) {
+    MarchingCubesOptions o;
+    double iso = 0.6;
+    pnh.param("iso", iso, iso);
+    if (!std::isfinite(iso) || !(iso > 0.0) || !(iso < 1.0))
+      throw std::invalid_argument("iso must be a probability in (0, 1)");
+    o.iso = static_cast<float>(std::floor(255.0 * iso) + 0.5);
+    if (o.iso >= 255.0f) o.iso = 254.5f;
+    std::string mode = "probabilistic";
+    pnh.param("mode", mode, mode);
+    if (mode == "binary")
+      o.mode = MeshingMode::kBinary;
+    else if (mode != "probabilistic")
+      throw std::invalid_argument("mode must be 'probabilistic' or 'binary', not '" + mode + "'");
+    pnh.param("close_at_border", o.close_at_border, o.close_at_border);
+    pnh.param("threads", o.threads, 1);
+    std::vector<double> c{0.93, 0.72, 0.60, 1.0};
+    pnh.param("marker_color", c, c);
+    if (c.size() != 4) throw std::invalid_argument("marker_color must be [r, g, b, a]");
+    color_.r = float(c[0]), color_.g = float(c[1]), color_.b = float(c[2]), color_.a = float(c[3]);
+    return o;
+  }
+
+  void onVolumes(const tabletop_msgs::HandVolumes::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++frames_;
+    if (msg->target_ids.size() != msg->volumes.size()) {
+      ++rejected_;
+      NODELET_WARN_THROTTLE(5.0, "hand_mesher: %zu target ids for %zu volumes: message ignored",
+                            msg->target_ids.size(), msg->volumes.size());
+      return;
+    }
+    auto meshes = boost::make_shared<tabletop_msgs::HandMeshes>();
+    meshes->header = msg->header;
+    meshes->header.frame_id = world_frame_;
+    const bool markers = publish_markers_ && marker_pub_.getNumSubscribers() > 0;
+    visualization_msgs::MarkerArray array;
+    std::set<uint32_t> present;
+    for (size_t i = 0; i < msg->volumes.size(); ++i) {
+      const uint32_t id = msg->target_ids[i];
+      try {
+        const ProbabilityGridView grid = gridView(msg->volumes[i]);
+        const ros::WallTime t0 = ros::WallTime::now();
+        mc_->extract(grid, &mesh_);
+        removeSmallComponents(&mesh_, size_t(std::max(0, min_component_triangles_)));
+        mesh_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
+      } catch (const std::exception& e) {
+        ++rejected_;
+        NODELET_WARN_THROTTLE(5.0, "hand_mesher: hand %u: volume rejected: %s", id, e.what());
+        continue;
+      }
+      triangles_.add(double(mesh_.numTriangles()));
+      tabletop_msgs::HandMesh m;
+      m.header = meshes->header;
+      m.target_id = id;
+      toMessage(mesh_, &m);
+      meshes->meshes.push_back(std::move(m));
+      present.insert(id);
+      if (markers) {
+        visualization_msgs::Marker mk;
+        toMarker(mesh_, "hand_meshes", int(id), color_, &mk);
+        mk.header = meshes->header;
+        array.markers.push_back(std::move(mk));
+      }
+    }
+    // Hands meshed last time but not now: lost, or their volume was rejected.
+    for (uint32_t id : last_ids_) {
+      if (present.count(id)) continue;
+      visualization_msgs::Marker del;
+      del.header = meshes->header;
+      del.ns = "hand_meshes";
+      del.id = int(id);
+      del.action = visualization_msgs::Marker::DELETE;
+      array.markers.push_back(del);
+    }
+    last_ids_ = present;
+    meshed_ += meshes->meshes.size();
+    mesh_pub_.publish(meshes);
+    if (publish_markers_ && !array.markers.empty()) marker_pub_.publish(array);
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    if (!fatal_.empty()) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: " + fatal_);
+      return;
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ros::WallTime now = ros::WallTime::now();
+    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
+    const double rate = dt > 0 ? (frames_ - frames_at_last_) / dt : 0.0;
+    if (frames_ == 0)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for hand volumes");
+    else if (rejected_ > rejected_at_last_)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting hand volumes (see the log)");
+    else
+      stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "meshing %zu hand(s)", last_ids_.size());
+    stat.add("rate (Hz)", rate);
+    stat.add("frames", frames_);
+    stat.add("meshes", meshed_);
+    stat.add("meshing per hand (ms)", mesh_ms_.mean());
+    stat.add("meshing per hand, max (ms)", mesh_ms_.count() ? mesh_ms_.max() : 0.0);
+    stat.add("triangles per hand", triangles_.mean());
+    stat.add("volumes rejected", rejected_);
+    last_diag_ = now;
+    frames_at_last_ = frames_;
+    rejected_at_last_ = rejected_;
+  }
+
+  std::unique_ptr<MarchingCubes> mc_;
+  TriangleMesh mesh_;
+  std::string fatal_, world_frame_;
+  bool publish_markers_ = true;
+  int min_component_triangles_ = 64;
+  std_msgs::ColorRGBA color_;
+  ros::Subscriber sub_;
+  ros::Publisher mesh_pub_, marker_pub_;
+  std::unique_ptr<diagnostic_updater::Updater> diag_;
+  ros::WallTimer diag_timer_;
+  std::mutex mutex_;
+  std::set<uint32_t> last_ids_;
+  ros::WallTime last_diag_;
+  uint64_t frames_ = 0, frames_at_last_ = 0, rejected_ = 0, rejected_at_last_ = 0, meshed_ = 0;
+  tabletop_capture::RunningStats mesh_ms_, triangles_;
+};
+
+}  // namespace cvephands
+
+PLUGINLIB_EXPORT_CLASS(cvephands::HandMesherNodelet, nodelet::Nodelet)

@@ -1,0 +1,188 @@
+// Integration test of the HandMesher nodelet (hosted in this process, like a nodelet manager):
+// synthetic hand volumes in (a ball of known radius per hand id), meshes and markers out.
+// Checks the mesh geometry against the ball, that ids carry through, that a hand which
+// disappears gets its marker deleted, and that malformed volumes are rejected and counted
+// without stopping the stream. The whole pipeline with the mesher runs in test_mpf_pipeline.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+#include <Eigen/Core>
+#include <boost/make_shared.hpp>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <tabletop_msgs/HandMeshes.h>
+#include <tabletop_msgs/HandVolumes.h>
+
+#include "tabletop_capture/ros/test_support.h"
+
+namespace {
+
+using tabletop_capture::test_support::loadNodelet;
+using tabletop_capture::test_support::loader;
+using tabletop_capture::test_support::waitFor;
+
+constexpr int kN = 83;             // voxels per side, as the pipeline's hand volumes
+constexpr double kVoxel = 0.30 / kN;
+constexpr double kRadius = 0.05;   // m
+
+// A ball of radius kRadius at the cube's centre with a linear probability ramp 2 voxels wide
+// (p = 0.6 exactly on the sphere), in a 30 cm cube whose min corner is `origin`.
+tabletop_msgs::VoxelVolume ball(const Eigen::Vector3d& origin) {
+  tabletop_msgs::VoxelVolume v;
+  v.origin.x = origin.x(), v.origin.y = origin.y(), v.origin.z = origin.z();
+  v.voxel_size = kVoxel;
+  v.size_x = v.size_y = v.size_z = kN;
+  v.data.resize(size_t(kN) * kN * kN);
+  const Eigen::Vector3d c = origin + Eigen::Vector3d::Constant(0.15);
+  for (int z = 0; z < kN; ++z)
+    for (int y = 0; y < kN; ++y)
+      for (int x = 0; x < kN; ++x) {
+        const Eigen::Vector3d p = origin + kVoxel * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
+        const double sd = (p - c).norm() - kRadius;
+        const double prob = std::clamp(0.6 - 0.25 * sd / kVoxel, 0.0, 1.0);
+        v.data[x + kN * (y + size_t(kN) * z)] = uint8_t(std::lround(255.0 * prob));
+      }
+  return v;
+}
+
+}  // namespace
+
+TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
+  ros::NodeHandle nh;
+  std::mutex m;
+  std::vector<tabletop_msgs::HandMeshes::ConstPtr> meshes;
+  std::vector<visualization_msgs::MarkerArray::ConstPtr> markers;
+  std::map<std::string, std::string> diag;
+  boost::function<void(const tabletop_msgs::HandMeshes::ConstPtr&)> on_meshes =
+      [&](const tabletop_msgs::HandMeshes::ConstPtr& x) {
+        std::lock_guard<std::mutex> l(m);
+        meshes.push_back(x);
+      };
+  boost::function<void(const visualization_msgs::MarkerArray::ConstPtr&)> on_markers =
+      [&](const visualization_msgs::MarkerArray::ConstPtr& x) {
+        std::lock_guard<std::mutex> l(m);
+        markers.push_back(x);
+      };
+  boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)> on_diag =
+      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
+        std::lock_guard<std::mutex> l(m);
+        for (const auto& s : d->status)
+          if (s.name.find("hand meshing") != std::string::npos)
+            for (const auto& kv : s.values) diag[kv.key] = kv.value;
+      };
+  auto s1 = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 10, on_meshes);
+  auto s2 = nh.subscribe<visualization_msgs::MarkerArray>("/tabletop/cve/hand_meshes", 10, on_markers);
+  auto s3 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
+  ros::Publisher pub = nh.advertise<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 5);
+  ASSERT_TRUE(loadNodelet("/tabletop/hand_mesher", "cvephands_bridge/HandMesher"));
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && s1.getNumPublishers() > 0 &&
+                                   s2.getNumPublishers() > 0; }, 10.0));
+
+  // Frame 1: hands 3 and 4.
+  const Eigen::Vector3d o3(-0.30, -0.20, 0.0), o4(0.05, -0.20, 0.0);
+  auto two = boost::make_shared<tabletop_msgs::HandVolumes>();
+  two->header.stamp = ros::Time(100.0);
+  two->header.frame_id = "world";
+  two->target_ids = {3, 4};
+  two->volumes = {ball(o3), ball(o4)};
+  pub.publish(two);
+  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return meshes.size() >= 1 && markers.size() >= 1; }, 10.0));
+  {
+    std::lock_guard<std::mutex> l(m);
+    const auto& hm = *meshes[0];
+    EXPECT_EQ(hm.header.stamp, ros::Time(100.0));
+    EXPECT_EQ(hm.header.frame_id, "world");
+    ASSERT_EQ(hm.meshes.size(), 2u);
+    for (int i = 0; i < 2; ++i) {
+      const auto& mesh = hm.meshes[i];
+      EXPECT_EQ(mesh.target_id, uint32_t(i == 0 ? 3 : 4));
+      const Eigen::Vector3d c = (i == 0 ? o3 : o4) + Eigen::Vector3d::Constant(0.15);
+      ASSERT_GT(mesh.triangles.size(), 3000u);  // a 5 cm ball at 3.6 mm: ~ 4 pi r^2 / (v^2 / 2)
+      ASSERT_EQ(mesh.normals.size(), mesh.vertices.size());
+      double worst = 0.0, worst_normal = 1.0;
+      for (size_t k = 0; k < mesh.vertices.size(); ++k) {
+        const Eigen::Vector3d p(mesh.vertices[k].x, mesh.vertices[k].y, mesh.vertices[k].z);
+        const Eigen::Vector3d n(mesh.normals[k].x, mesh.normals[k].y, mesh.normals[k].z);
+        worst = std::max(worst, std::abs((p - c).norm() - kRadius));
+        worst_normal = std::min(worst_normal, n.dot((p - c).normalized()));
+      }
+      for (uint32_t t : mesh.triangles) ASSERT_LT(t, mesh.vertices.size());
+      std::printf("[mesher] hand %u: %zu vertices, %zu triangles, worst |r - R| %.2f mm, "
+                  "worst normal cos %.3f\n", mesh.target_id, mesh.vertices.size(),
+                  mesh.triangles.size() / 3, 1e3 * worst, worst_normal);
+      // Linear interpolation of a linear ramp: exact up to float rounding and the ramp's
+      // curvature (a fraction of a voxel).
+      EXPECT_LT(worst, 0.25 * kVoxel);
+      EXPECT_GT(worst_normal, 0.95);
+    }
+    const auto& ma = *markers[0];
+    ASSERT_EQ(ma.markers.size(), 2u);
+    for (const auto& mk : ma.markers) {
+      EXPECT_EQ(mk.type, visualization_msgs::Marker::TRIANGLE_LIST);
+      EXPECT_EQ(mk.action, visualization_msgs::Marker::ADD);
+      EXPECT_EQ(mk.points.size(), hm.meshes[mk.id == 3 ? 0 : 1].triangles.size());
+      EXPECT_EQ(mk.header.frame_id, "world");
+    }
+  }
+
+  // Frame 2: hand 4 is gone -> its marker is deleted, hand 3 is updated.
+  auto one = boost::make_shared<tabletop_msgs::HandVolumes>();
+  one->header.stamp = ros::Time(100.04);
+  one->target_ids = {3};
+  one->volumes = {ball(o3)};
+  pub.publish(one);
+  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return meshes.size() >= 2 && markers.size() >= 2; }, 10.0));
+  {
+    std::lock_guard<std::mutex> l(m);
+    ASSERT_EQ(meshes[1]->meshes.size(), 1u);
+    bool deleted4 = false, added3 = false;
+    for (const auto& mk : markers[1]->markers) {
+      deleted4 |= mk.id == 4 && mk.action == visualization_msgs::Marker::DELETE;
+      added3 |= mk.id == 3 && mk.action == visualization_msgs::Marker::ADD;
+    }
+    EXPECT_TRUE(deleted4);
+    EXPECT_TRUE(added3);
+  }
+
+  // Malformed: data shorter than the dims, and ids/volumes of different counts. Hand 3 of the
+  // first message is still meshed; the second message is dropped whole.
+  auto bad = boost::make_shared<tabletop_msgs::HandVolumes>();
+  bad->header.stamp = ros::Time(100.08);
+  bad->target_ids = {3, 4};
+  bad->volumes = {ball(o3), ball(o4)};
+  bad->volumes[1].data.resize(10);
+  pub.publish(bad);
+  auto mismatched = boost::make_shared<tabletop_msgs::HandVolumes>();
+  mismatched->header.stamp = ros::Time(100.12);
+  mismatched->target_ids = {3};
+  pub.publish(mismatched);
+  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return meshes.size() >= 3; }, 10.0));
+  {
+    std::lock_guard<std::mutex> l(m);
+    ASSERT_EQ(meshes[2]->meshes.size(), 1u);
+    EXPECT_EQ(meshes[2]->meshes[0].target_id, 3u);
+  }
+  EXPECT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return diag["volumes rejected"] == "2"; }, 5.0));
+  std::lock_guard<std::mutex> l(m);
+  std::printf("[mesher] diagnostics: %s ms per hand, %s triangles per hand\n",
+              diag["meshing per hand (ms)"].c_str(), diag["triangles per hand"].c_str());
+  EXPECT_EQ(diag["meshes"], "4");
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_hand_mesher");
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int rc = RUN_ALL_TESTS();
+  loader().clear();
+  spinner.stop();
+  ros::shutdown();
+  return rc;
+}
