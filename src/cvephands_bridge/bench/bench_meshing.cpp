@@ -3,7 +3,8 @@
 // and without normals. Workloads (test/synthetic_volumes.h): two 83^3 hand sub-volumes (the
 // per-frame case, DESIGN.md section 4), and person-like volumes at 128x128x96 and 256x256x192.
 // Counters: triangles and vertices per iteration (summed over the volumes of the workload).
-// VTK runs on its own SMP backend (TBB in Debian's build) with its default thread count.
+// VTK runs on its own SMP backend (TBB in Debian's build): vtkFlyingEdges3D on 2 threads and
+// on 1; vtkMarchingCubes is single-threaded.
 //
 //   bench_meshing --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -86,10 +87,12 @@ vtkSmartPointer<vtkImageData> vtkImage(const TestVolume& v) {
   return image;
 }
 
-// args: workload, normals
+// args: workload, normals, threads (vtkSMPTools::Initialize; explicit, since a later
+// Initialize(0) does not bring back the default once a count was set)
 template <typename Filter>
 void BM_Vtk(benchmark::State& st) {
   const auto& vols = volumes(static_cast<int>(st.range(0)));
+  vtkSMPTools::Initialize(static_cast<int>(st.range(2)));
   std::vector<vtkSmartPointer<vtkImageData>> images;
   std::vector<vtkSmartPointer<Filter>> filters;
   for (const auto& v : vols) {
@@ -128,19 +131,26 @@ void oursArgs(benchmark::internal::Benchmark* b) {
     b->Args({w, 1, 1, 2});
   }
 }
-void vtkArgs(benchmark::internal::Benchmark* b) {
+void flyingEdgesArgs(benchmark::internal::Benchmark* b) {
   for (int w = 0; w < 3; ++w) {
-    b->Args({w, 1});
-    b->Args({w, 0});
+    b->Args({w, 1, 2});
+    b->Args({w, 1, 1});
+    b->Args({w, 0, 2});
+  }
+}
+void marchingCubesArgs(benchmark::internal::Benchmark* b) {  // single-threaded filter
+  for (int w = 0; w < 3; ++w) {
+    b->Args({w, 1, 1});
+    b->Args({w, 0, 1});
   }
 }
 
 BENCHMARK(BM_Ours)->Apply(oursArgs)->ArgNames({"work", "binary", "normals", "threads"})
     ->Unit(benchmark::kMicrosecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_Vtk, vtkFlyingEdges3D)->Apply(vtkArgs)->ArgNames({"work", "normals"})
-    ->Unit(benchmark::kMicrosecond)->UseRealTime();
-BENCHMARK_TEMPLATE(BM_Vtk, vtkMarchingCubes)->Apply(vtkArgs)->ArgNames({"work", "normals"})
-    ->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_Vtk, vtkFlyingEdges3D)->Apply(flyingEdgesArgs)
+    ->ArgNames({"work", "normals", "threads"})->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK_TEMPLATE(BM_Vtk, vtkMarchingCubes)->Apply(marchingCubesArgs)
+    ->ArgNames({"work", "normals", "threads"})->Unit(benchmark::kMicrosecond)->UseRealTime();
 
 }  // namespace
 

@@ -18,11 +18,12 @@
 // OpenMP; every vertex and triangle has a slot fixed before the fill pass, so the output is
 // byte-identical for any thread count.
 //
-// Why not VTK: bench/bench_meshing.cpp measures vtkFlyingEdges3D and vtkMarchingCubes on the
-// same volumes (2-core AMD EPYC, with normals, iso 153.5; 2 threads for ours and for VTK's TBB
-// backend): two 83^3 hand volumes 0.16 ms here vs 2.4 ms (flying edges) and 9.5 ms (marching
-// cubes); 256x256x192 person 3.2 ms vs 14.5 ms / 60 ms. VTK also has no "closed at the border"
-// mode and would be a heavy run-time dependency for one filter; it stays a benchmark-only one.
+// Why not VTK: bench/bench_meshing.cpp runs vtkFlyingEdges3D and vtkMarchingCubes on the same
+// bytes (2-core AMD EPYC, normals on, iso 153.5, identical triangle counts; docs/benchmarks.md):
+// two 83^3 hand volumes take 0.26 ms here vs 0.62 ms (flying edges, 2 TBB threads) and 7.0 ms
+// (marching cubes, single-threaded); on one thread 0.49 ms vs 1.2 ms (flying edges). A
+// 256x256x192 person: 2.2 ms vs 6.8 / 68 ms. VTK also has no "closed at the border" mode and
+// would be a heavy run-time dependency for one filter; it stays a benchmark-only one.
 #pragma once
 
 #include <cstdint>
