@@ -1,7 +1,7 @@
 // mesh_eval: accuracy of the hand meshes on the simulated rig (hand_mesh_evaluation.h): mean and
 // 95th-percentile distances (mm) from the mesh to the true hand surface and back, for the
 // probabilistic and the binary marching cubes, printed and written to <out>/mesh_accuracy.txt,
-// plus <out>/hand_meshes.png (both hands of one frame, probabilistic left, binary right).
+// plus <out>/hand_meshes.png (both hands of one frame: probabilistic meshes above, binary below).
 //
 //   mesh_eval [--script NAME] [--frames N] [--every K] [--seed N] [--iso P] [--out DIR]
 #include <cstdio>
@@ -31,25 +31,29 @@ void usage() {
                "  --out     output folder (default ./output)\n");
 }
 
-// Both hands of the picture frame, seen from above the desk on the user's side, looking
-// forward and down; probabilistic and binary side by side.
+// Both hands of the picture frame, each framed on its own (seen from the user's side of the
+// desk, looking forward and down): probabilistic meshes in the top row, binary below, so the
+// two variants of one hand compare pixel for pixel.
 cv::Mat picture(const cvephands::HandMeshEvalResult& r) {
   using cvephands::RenderItem;
   const Eigen::Vector3d dir(0.0, 0.75, -0.66);
-  std::vector<RenderItem> all;
-  for (int m = 0; m < 2; ++m)
-    for (int s = 0; s < 2; ++s) all.push_back(RenderItem{&r.picture[m][s]});
-  // One camera for both panels (framed on all four meshes) so they compare pixel for pixel.
-  const cvephands::RenderCamera cam = cvephands::framingCamera(all, dir, 640, 480);
-  cv::Mat panels[2];
-  const char* names[2] = {"probabilistic (iso on p)", "binary (threshold, then mesh)"};
-  for (int m = 0; m < 2; ++m) {
-    panels[m] = cvephands::renderMeshes({RenderItem{&r.picture[m][0]}, RenderItem{&r.picture[m][1]}}, cam);
-    cv::putText(panels[m], names[m], cv::Point(12, 28), cv::FONT_HERSHEY_SIMPLEX, 0.7,
-                cv::Scalar(40, 40, 40), 2, cv::LINE_AA);
+  const char* rows[2] = {"probabilistic", "binary"};
+  const char* sides[2] = {"left hand", "right hand"};
+  cv::Mat grid[2][2];
+  for (int s = 0; s < 2; ++s) {
+    const cvephands::RenderCamera cam = cvephands::framingCamera(
+        {RenderItem{&r.picture[0][s]}, RenderItem{&r.picture[1][s]}}, dir, 480, 360);
+    for (int m = 0; m < 2; ++m) {
+      grid[m][s] = cvephands::renderMeshes({RenderItem{&r.picture[m][s]}}, cam);
+      cv::putText(grid[m][s], std::string(rows[m]) + ", " + sides[s], cv::Point(10, 24),
+                  cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
+      cv::rectangle(grid[m][s], cv::Rect(0, 0, 480, 360), cv::Scalar(200, 200, 200), 1);
+    }
   }
-  cv::Mat out;
-  cv::hconcat(panels[0], panels[1], out);
+  cv::Mat top, bottom, out;
+  cv::hconcat(grid[0][0], grid[0][1], top);
+  cv::hconcat(grid[1][0], grid[1][1], bottom);
+  cv::vconcat(top, bottom, out);
   return out;
 }
 
