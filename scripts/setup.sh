@@ -20,7 +20,7 @@ PACKAGES=(
   libnodeletlib-dev libimage-transport-dev libcv-bridge-dev libtf2-ros-dev
   libmessage-filters-dev librosbag-dev libdiagnostic-updater-dev libvisualization-msgs-dev
   libpcl-dev libpcl-conversions-dev libopencv-dev libeigen3-dev libyaml-cpp-dev
-  libgtest-dev libbenchmark-dev libzstd-dev
+  libgtest-dev libbenchmark-dev libzstd-dev libboost-dev
   rviz xvfb x11-apps imagemagick libgl1-mesa-dri
 )
 

@@ -19,6 +19,7 @@
 #include <tabletop_msgs/HandMeshes.h>
 #include <tabletop_msgs/HandVolumes.h>
 
+#include "ball_volume.h"
 #include "tabletop_capture/ros/test_support.h"
 
 namespace {
@@ -31,24 +32,8 @@ constexpr int kN = 83;             // voxels per side, as the pipeline's hand vo
 constexpr double kVoxel = 0.30 / kN;
 constexpr double kRadius = 0.05;   // m
 
-// A ball of radius kRadius at the cube's centre with a linear probability ramp 2 voxels wide
-// (p = 0.6 exactly on the sphere), in a 30 cm cube whose min corner is `origin`.
 tabletop_msgs::VoxelVolume ball(const Eigen::Vector3d& origin) {
-  tabletop_msgs::VoxelVolume v;
-  v.origin.x = origin.x(), v.origin.y = origin.y(), v.origin.z = origin.z();
-  v.voxel_size = kVoxel;
-  v.size_x = v.size_y = v.size_z = kN;
-  v.data.resize(size_t(kN) * kN * kN);
-  const Eigen::Vector3d c = origin + Eigen::Vector3d::Constant(0.15);
-  for (int z = 0; z < kN; ++z)
-    for (int y = 0; y < kN; ++y)
-      for (int x = 0; x < kN; ++x) {
-        const Eigen::Vector3d p = origin + kVoxel * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
-        const double sd = (p - c).norm() - kRadius;
-        const double prob = std::clamp(0.6 - 0.25 * sd / kVoxel, 0.0, 1.0);
-        v.data[x + kN * (y + size_t(kN) * z)] = uint8_t(std::lround(255.0 * prob));
-      }
-  return v;
+  return cvephands_test::ballVolume(origin, kRadius, kN, 0.30);
 }
 
 }  // namespace

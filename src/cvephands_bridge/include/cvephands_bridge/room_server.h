@@ -1,0 +1,111 @@
+// Room server (DESIGN.md section 4, "Hand meshes and the CVE"): a WebSocket relay that puts the
+// hands of several rigs into shared meeting rooms, and the web server of the browser client.
+// The protocol is room_protocol.h; rigs usually feed it through RoomClient (room_client.h), from
+// the same machine or across the network.
+//
+// Live hand data must never wait for the slowest participant, so every connection has its own
+// bounded outgoing queue and its own asynchronous writes: when a receiver falls behind, the
+// OLDEST hand message queued for it is dropped (counted), control messages never are, and a
+// receiver whose current write has made no progress for stall_timeout is disconnected. Anything
+// that breaks the protocol (malformed JSON, binary before the join, an oversized message, a
+// wrong token) gets an error message and closes that connection only.
+//
+// Exposure: binds 127.0.0.1 unless told otherwise. On another address anyone who reaches the
+// port can join a room unless a token is set; the token travels in clear text (no TLS here:
+// put a TLS-terminating proxy in front for real networks). Browsers let any web page open a
+// WebSocket to 127.0.0.1, so upgrades from a browser (they carry an Origin header) are accepted
+// only from the server's own pages or allowed_origins, and on a loopback bind only with a
+// loopback Host header (a DNS-rebinding page names its own host there).
+//
+// Implementation: Boost.Beast on Boost.Asio (Debian's Boost, header-only), one io_context with
+// `threads` threads, one strand per connection; hidden behind this header so users do not
+// compile Beast.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cvephands_bridge/room_protocol.h"
+
+namespace cvephands {
+
+struct RoomServerOptions {
+  std::string bind_address = "127.0.0.1";  // IPv4 or IPv6 literal; "0.0.0.0" for all
+  uint16_t port = 0;                       // 0: ephemeral; RoomServer::port() tells which
+  std::string token;                       // empty: no token required
+  // Origins ("http://host:port", exact, case-insensitive) whose pages may connect besides the
+  // server's own; "*" allows any. Clients without an Origin header (RoomClient) are not
+  // affected.
+  std::vector<std::string> allowed_origins;
+  std::string static_root;                    // browser client directory; empty: no HTTP files
+  size_t max_message_size = size_t(1) << 20;  // bytes, any message a client sends
+  // Hand messages queued per SLOW receiver (its current write has waited > 50 ms) before the
+  // oldest is dropped. A receiver that keeps up may queue 4x as many during a burst.
+  size_t queue_length = 16;
+  double stall_timeout = 5.0;        // s: a receiver whose write is stuck this long is closed
+  size_t max_clients = 64;           // WebSocket connections (joined or not)
+  size_t max_http_connections = 32;  // plain HTTP connections (the browser's file requests)
+  double join_timeout = room::kJoinTimeoutSeconds;  // s from the handshake to the join
+  // A client silent for half to all of this (s) is closed: the server pings it at half this
+  // period and browsers and RoomClient answer on their own. 0: never (and no pings).
+  double idle_timeout = 30.0;
+  room::SeatLayout seats;
+  int threads = 1;  // io_context threads (a rig sends ~1 Mbit/s of hands: one is plenty)
+};
+
+struct ParticipantStats {
+  uint32_t id = 0;
+  std::string room, name;
+  room::Role role = room::Role::kRig;
+  int seat = -1;
+  uint64_t messages_in = 0, bytes_in = 0;    // hand messages received from it
+  uint64_t messages_out = 0, bytes_out = 0;  // messages written to it (all kinds)
+  uint64_t dropped = 0;                      // hand messages dropped for it (slow reader)
+  size_t queued = 0;                         // messages waiting for it now
+};
+
+struct RoomStats {
+  std::string name;
+  size_t rigs = 0, viewers = 0;
+  // Sums over the room's participants, present and past (a room lives while it has members).
+  uint64_t messages_in = 0, bytes_in = 0, messages_out = 0, bytes_out = 0, dropped = 0;
+};
+
+struct RoomServerStats {
+  std::vector<RoomStats> rooms;                // by name
+  std::vector<ParticipantStats> participants;  // joined ones, by id
+  uint64_t connections = 0;                    // TCP connections accepted
+  uint64_t http_requests = 0;                  // plain HTTP requests answered (files and errors)
+  uint64_t dropped = 0;                        // hand messages dropped, all receivers ever
+  // Connections the server closed, by error reason (room_protocol.h), e.g. "slow_client".
+  std::map<std::string, uint64_t> kicked;
+};
+
+class RoomServer {
+ public:
+  explicit RoomServer(const RoomServerOptions& options = RoomServerOptions());
+  ~RoomServer();  // stop()
+  RoomServer(const RoomServer&) = delete;
+  RoomServer& operator=(const RoomServer&) = delete;
+
+  // Binds, listens and starts the threads. Throws std::runtime_error when the address cannot
+  // be bound or static_root is not a directory, std::invalid_argument for bad options. Once.
+  void start();
+  // Closes the listener, tells every client "shutdown" (close code 1001), gives them a moment
+  // to close cleanly, then cuts what is left and joins the threads. Returns within ~1.5 s.
+  void stop();
+
+  uint16_t port() const;  // the bound port, valid after start()
+  const RoomServerOptions& options() const;
+  RoomServerStats stats() const;  // thread-safe, for diagnostics
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cvephands

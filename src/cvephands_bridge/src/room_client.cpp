@@ -1,0 +1,335 @@
+#include "cvephands_bridge/room_client.h"
+
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <future>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+
+namespace cvephands {
+namespace {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace websocket = beast::websocket;
+using tcp = net::ip::tcp;
+using Payload = std::shared_ptr<const std::vector<uint8_t>>;
+
+constexpr auto kCloseTimeout = std::chrono::seconds(2);
+
+std::chrono::steady_clock::duration toDuration(double seconds) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(seconds));
+}
+
+}  // namespace
+
+// Everything below runs on the client's one io thread, except the members marked otherwise.
+// Handlers capture `this`: close() joins the thread before the object goes, and handlers still
+// queued then are destroyed with the io_context without running.
+struct RoomClient::Impl {
+  explicit Impl(const RoomClientOptions& o) : options(o) {
+    if (options.send_queue_length < 1)
+      throw std::invalid_argument("RoomClient: send_queue_length < 1");
+  }
+
+  void start() {
+    resolver.async_resolve(
+        options.host, std::to_string(options.port),
+        [this](beast::error_code ec, tcp::resolver::results_type results) {
+          if (ec) return end("resolve: " + ec.message());
+          beast::get_lowest_layer(ws).expires_after(toDuration(options.connect_timeout));
+          beast::get_lowest_layer(ws).async_connect(
+              results, [this](beast::error_code ec, const tcp::endpoint&) { onConnect(ec); });
+        });
+  }
+
+  void onConnect(beast::error_code ec) {
+    if (ec) return end("connect: " + ec.message());
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws).socket().set_option(tcp::no_delay(true), ignored);
+    beast::get_lowest_layer(ws).expires_never();  // the websocket timeouts take over
+    websocket::stream_base::timeout t;
+    t.handshake_timeout = toDuration(options.connect_timeout);
+    // Idleness is watched by armIdle(), not by Beast: Beast 1.74 counts its idle timeout only
+    // with keep-alive pings of its own, and pings from both ends sometimes stall the close
+    // handshake until its timeout. The server pings; pongs are automatic.
+    t.idle_timeout = websocket::stream_base::none();
+    t.keep_alive_pings = false;
+    ws.set_option(t);
+    ws.control_callback([this](websocket::frame_type, beast::string_view) { heard(); });
+    ws.read_message_max(options.max_message_size);
+    ws.auto_fragment(false);
+    ws.async_handshake(options.host + ":" + std::to_string(options.port), options.path,
+                       [this](beast::error_code ec) {
+                         if (ec) return end("handshake: " + ec.message());
+                         handshaken = true;
+                         if (close_requested) return doClose();
+                         heard();
+                         armIdle();
+                         join_text = room::encodeJoin(options.join);
+                         ws.text(true);
+                         ws.async_write(net::buffer(join_text),
+                                        [this](beast::error_code ec, size_t) {
+                                          if (ec) return end("join: " + ec.message());
+                                          doRead();
+                                        });
+                       });
+  }
+
+  void doRead() {
+    ws.async_read(in, [this](beast::error_code ec, size_t) { onRead(ec); });
+  }
+
+  void heard() { last_heard = std::chrono::steady_clock::now(); }
+
+  // A server that vanished without closing (network gone) is noticed here: nothing, not even
+  // its pings (every 15 s by default), for idle_timeout.
+  void armIdle() {
+    if (!(options.idle_timeout > 0)) return;
+    idle_timer.expires_after(toDuration(options.idle_timeout / 4));
+    idle_timer.async_wait([this](beast::error_code ec) {
+      if (ec || ended || closing) return;
+      if (std::chrono::steady_clock::now() - last_heard > toDuration(options.idle_timeout))
+        return end("idle_timeout: nothing from the server for " +
+                   std::to_string(options.idle_timeout) + " s");
+      armIdle();
+    });
+  }
+
+  void onRead(beast::error_code ec) {
+    if (ec) {
+      std::string reason = ec.message();
+      if (ec == websocket::error::closed && !ws.reason().reason.empty())
+        reason = std::string(ws.reason().reason.c_str());
+      return end(reason);
+    }
+    heard();
+    const auto data = in.data();
+    const auto* bytes = static_cast<const uint8_t*>(data.data());
+    if (ws.got_text()) {
+      onText(room::parseServerMessage(
+          std::string_view(reinterpret_cast<const char*>(bytes), data.size())));
+    } else {
+      room::RelayHeader h;
+      size_t offset;
+      if (room::readRelayHeader(bytes, data.size(), &h, &offset)) {
+        ++received;
+        bytes_received += data.size() - offset;
+        if (options.on_hands) options.on_hands(h, bytes + offset, data.size() - offset);
+      }
+    }
+    in.consume(in.size());
+    doRead();
+  }
+
+  void onText(const room::ServerMessage& m) {
+    switch (m.type) {
+      case room::ServerMessage::Type::kWelcome: {
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          self = m.self;
+        }
+        connected = true;
+        settle("");
+        break;
+      }
+      case room::ServerMessage::Type::kParticipants: {
+        std::lock_guard<std::mutex> lock(mutex);
+        participants = m.participants;
+      }
+        if (options.on_participants) options.on_participants(m.participants);
+        break;
+      case room::ServerMessage::Type::kError:
+        server_error = m.reason + ": " + m.detail;  // the close follows
+        break;
+      default:
+        break;  // pong, or a later protocol's message
+    }
+  }
+
+  void enqueue(Payload p) {
+    if (ended || close_requested) return;
+    if (queue.size() >= options.send_queue_length) {
+      queue.pop_front();  // live data: the newest hands matter
+      ++send_dropped;
+    }
+    queue.push_back(std::move(p));
+    if (!writing) writeNext();
+  }
+
+  void writeNext() {
+    if (ended) return;
+    if (close_requested) return doClose();
+    if (queue.empty()) return;
+    in_flight = std::move(queue.front());
+    queue.pop_front();
+    writing = true;
+    ws.binary(true);
+    ws.async_write(net::buffer(*in_flight), [this](beast::error_code ec, size_t n) {
+      writing = false;
+      in_flight.reset();
+      if (ec) return end("write: " + ec.message());
+      ++sent;
+      bytes_sent += n;
+      writeNext();
+    });
+  }
+
+  // On the io thread, after close() asked for it.
+  void doClose() {
+    if (ended || closing) return;
+    queue.clear();
+    if (!handshaken) return end("closed");  // still connecting: cut
+    if (writing) return;                    // writeNext comes back here
+    closing = true;
+    websocket::stream_base::timeout t;
+    t.handshake_timeout = kCloseTimeout;  // also bounds the close handshake
+    t.idle_timeout = websocket::stream_base::none();
+    t.keep_alive_pings = false;
+    ws.set_option(t);
+    ws.async_close(websocket::close_code::normal, [this](beast::error_code) { end("closed"); });
+  }
+
+  void end(const std::string& why) {
+    if (ended) return;
+    ended = true;
+    connected = false;
+    resolver.cancel();
+    idle_timer.cancel();
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws).socket().shutdown(tcp::socket::shutdown_both, ignored);
+    beast::get_lowest_layer(ws).close();
+    queue.clear();
+    const std::string reason = server_error.empty() ? why : server_error;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      close_reason = reason;
+    }
+    if (!settle(reason) && !user_closed && options.on_closed) options.on_closed(reason);
+  }
+
+  // Answers connect() once; true if this call did.
+  bool settle(const std::string& result) {
+    if (settled) return false;
+    settled = true;
+    joined.set_value(result);
+    return true;
+  }
+
+  RoomClientOptions options;
+  net::io_context ioc;
+  std::optional<net::executor_work_guard<net::io_context::executor_type>> work;
+  tcp::resolver resolver{ioc};
+  net::steady_timer idle_timer{ioc};
+  std::chrono::steady_clock::time_point last_heard;
+  websocket::stream<beast::tcp_stream> ws{ioc};
+  beast::flat_buffer in;
+  std::string join_text;
+  std::deque<Payload> queue;
+  Payload in_flight;
+  bool writing = false, handshaken = false, closing = false, ended = false, settled = false;
+  bool close_requested = false;
+  std::string server_error;
+  std::promise<std::string> joined;  // "" or the reason connect() failed
+  std::thread thread;
+  std::promise<void> thread_done;
+
+  // Any thread.
+  std::atomic<bool> connected{false}, user_closed{false}, started{false};
+  std::atomic<uint64_t> sent{0}, bytes_sent{0}, send_dropped{0}, received{0}, bytes_received{0};
+  mutable std::mutex mutex;  // the three below
+  room::ParticipantInfo self;
+  std::vector<room::ParticipantInfo> participants;
+  std::string close_reason;
+};
+
+RoomClient::RoomClient(const RoomClientOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+
+RoomClient::~RoomClient() { close(); }
+
+bool RoomClient::connect(std::string* error) {
+  Impl& d = *impl_;
+  if (d.started.exchange(true)) throw std::logic_error("RoomClient::connect: once per object");
+  std::future<std::string> joined = d.joined.get_future();
+  d.work.emplace(d.ioc.get_executor());
+  d.thread = std::thread([&d] {
+    d.ioc.run();
+    d.thread_done.set_value();
+  });
+  net::post(d.ioc, [&d] { d.start(); });
+  std::string result = "connect: timed out";
+  if (joined.wait_for(toDuration(d.options.connect_timeout) + std::chrono::milliseconds(500)) ==
+      std::future_status::ready)
+    result = joined.get();
+  if (result.empty()) return true;
+  if (error) *error = result;
+  close();
+  return false;
+}
+
+bool RoomClient::send(std::vector<uint8_t>&& payload) {
+  Impl& d = *impl_;
+  if (!d.connected) return false;
+  auto p = std::make_shared<const std::vector<uint8_t>>(std::move(payload));
+  net::post(d.ioc, [&d, p = std::move(p)]() mutable { d.enqueue(std::move(p)); });
+  return true;
+}
+
+bool RoomClient::send(const uint8_t* data, size_t size) {
+  return send(std::vector<uint8_t>(data, data + size));
+}
+
+void RoomClient::close() {
+  Impl& d = *impl_;
+  if (!d.thread.joinable()) return;
+  if (std::this_thread::get_id() == d.thread.get_id())
+    throw std::logic_error("RoomClient::close from its own callback");
+  d.user_closed = true;
+  net::post(d.ioc, [&d] {
+    d.close_requested = true;
+    d.doClose();
+  });
+  d.work.reset();
+  if (d.thread_done.get_future().wait_for(kCloseTimeout + std::chrono::seconds(1)) !=
+      std::future_status::ready)
+    d.ioc.stop();  // something is stuck; its handlers die with the io_context
+  d.thread.join();
+  d.connected = false;
+}
+
+bool RoomClient::connected() const { return impl_->connected; }
+
+room::ParticipantInfo RoomClient::self() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->self;
+}
+
+std::vector<room::ParticipantInfo> RoomClient::participants() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->participants;
+}
+
+std::string RoomClient::closeReason() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->close_reason;
+}
+
+RoomClientStats RoomClient::stats() const {
+  RoomClientStats s;
+  s.sent = impl_->sent;
+  s.bytes_sent = impl_->bytes_sent;
+  s.send_dropped = impl_->send_dropped;
+  s.received = impl_->received;
+  s.bytes_received = impl_->bytes_received;
+  return s;
+}
+
+}  // namespace cvephands

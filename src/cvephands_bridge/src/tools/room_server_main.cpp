@@ -1,0 +1,99 @@
+// room_server: the CVE's room server as a standalone program (no ROS needed): relays hand
+// streams between the participants of each room and serves the browser client.
+//
+//   room_server [--bind ADDR] [--port N] [--token T] [--static DIR] [--seats N] [--status S]
+//
+// Prints a status line every --status seconds (rooms, participants, messages, drops) and stops
+// cleanly on SIGINT / SIGTERM.
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+
+#include "cvephands_bridge/room_server.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+
+void usage() {
+  std::fprintf(stderr,
+               "usage: room_server [--bind ADDR] [--port N] [--token T] [--static DIR] [--seats N] "
+               "[--status S]\n"
+               "  --bind    address to listen on (default 127.0.0.1; 0.0.0.0 for every interface)\n"
+               "  --port    TCP port of HTTP + WebSocket (default 8765; 0 = any free port)\n"
+               "  --token   shared token every participant must send (default: none)\n"
+               "  --static  directory of the browser client served over HTTP (default: none)\n"
+               "  --seats   seats per room around the virtual table (default 6)\n"
+               "  --status  seconds between status lines (default 5; 0 = none)\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cvephands::RoomServerOptions o;
+  o.port = 8765;
+  double status = 5.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        usage();
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--bind") o.bind_address = next();
+    else if (a == "--port") o.port = static_cast<uint16_t>(std::atoi(next().c_str()));
+    else if (a == "--token") o.token = next();
+    else if (a == "--static") o.static_root = next();
+    else if (a == "--seats") o.seats.seats = std::atoi(next().c_str());
+    else if (a == "--status") status = std::atof(next().c_str());
+    else if (a == "-h" || a == "--help") {
+      usage();
+      return 0;
+    } else {
+      std::fprintf(stderr, "room_server: unknown argument '%s'\n", a.c_str());
+      usage();
+      return 2;
+    }
+  }
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  cvephands::RoomServer server(o);
+  try {
+    server.start();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "room_server: cannot start: %s\n", e.what());
+    return 1;
+  }
+  std::printf("[room_server] listening on %s:%u (WebSocket path /ws)%s%s\n", o.bind_address.c_str(),
+              server.port(), o.static_root.empty() ? "" : ", client from ",
+              o.static_root.c_str());
+  std::fflush(stdout);
+  auto last = std::chrono::steady_clock::now();
+  while (!g_stop) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (status <= 0) continue;
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last).count() < status) continue;
+    last = now;
+    const cvephands::RoomServerStats s = server.stats();
+    uint64_t in = 0;
+    for (const auto& r : s.rooms) in += r.messages_in;
+    uint64_t kicked = 0;
+    for (const auto& k : s.kicked) kicked += k.second;
+    std::printf("[room_server] %zu room(s), %zu participant(s), %llu hand messages in, %llu "
+                "dropped for slow readers, %llu connection(s) closed for errors\n",
+                s.rooms.size(), s.participants.size(), static_cast<unsigned long long>(in),
+                static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(kicked));
+    std::fflush(stdout);
+  }
+  server.stop();
+  std::printf("[room_server] stopped\n");
+  return 0;
+}

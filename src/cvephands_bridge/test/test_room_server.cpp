@@ -1,0 +1,783 @@
+// Room server on loopback: RoomClients (as the bridge nodelet will use them) exchange hands
+// through rooms, and raw WebSocket / HTTP clients misbehave (malformed JSON, binary before the
+// join, oversized messages, a client that stops reading, wrong tokens, path traversal) while
+// the well-behaved participants' traffic is counted to show it is unaffected.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+
+#include "cvephands_bridge/room_client.h"
+#include "cvephands_bridge/room_server.h"
+
+namespace cvephands {
+namespace {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using tcp = net::ip::tcp;
+using Clock = std::chrono::steady_clock;
+using namespace std::chrono_literals;
+
+// Test payloads: [u32 index][i64 send time, steady ns][filler].
+std::vector<uint8_t> makePayload(uint32_t index, size_t size) {
+  std::vector<uint8_t> p(std::max<size_t>(size, 12), uint8_t(index * 7));
+  const int64_t t = Clock::now().time_since_epoch().count();
+  std::memcpy(p.data(), &index, 4);
+  std::memcpy(p.data() + 4, &t, 8);
+  return p;
+}
+uint32_t payloadIndex(const uint8_t* p) {
+  uint32_t i;
+  std::memcpy(&i, p, 4);
+  return i;
+}
+double payloadAgeMs(const uint8_t* p) {
+  int64_t t;
+  std::memcpy(&t, p + 4, 8);
+  return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch() -
+                                                   Clock::duration(t))
+      .count();
+}
+
+// What a RoomClient saw, with waits.
+struct Inbox {
+  struct Hand {
+    room::RelayHeader header;
+    uint32_t index;
+    size_t size;
+    double age_ms;
+  };
+  // Recursive: the wait predicates call the counting helpers below.
+  std::recursive_mutex m;
+  std::condition_variable_any cv;
+  std::vector<Hand> hands;
+  std::vector<std::vector<room::ParticipantInfo>> lists;
+  std::string closed;
+
+  RoomClientOptions wire(RoomClientOptions o) {
+    o.on_hands = [this](const room::RelayHeader& h, const uint8_t* p, size_t n) {
+      std::lock_guard<std::recursive_mutex> lock(m);
+      hands.push_back({h, n >= 12 ? payloadIndex(p) : 0u, n, n >= 12 ? payloadAgeMs(p) : 0.0});
+      cv.notify_all();
+    };
+    o.on_participants = [this](const std::vector<room::ParticipantInfo>& l) {
+      std::lock_guard<std::recursive_mutex> lock(m);
+      lists.push_back(l);
+      cv.notify_all();
+    };
+    o.on_closed = [this](const std::string& reason) {
+      std::lock_guard<std::recursive_mutex> lock(m);
+      closed = reason;
+      cv.notify_all();
+    };
+    return o;
+  }
+  bool waitFor(const std::function<bool()>& done, std::chrono::milliseconds timeout = 3000ms) {
+    std::unique_lock<std::recursive_mutex> lock(m);
+    return cv.wait_for(lock, timeout, done);
+  }
+  size_t handsFrom(uint32_t sender) {
+    std::lock_guard<std::recursive_mutex> lock(m);
+    return size_t(std::count_if(hands.begin(), hands.end(),
+                                [&](const Hand& h) { return h.header.sender == sender; }));
+  }
+  size_t lastListSize() {
+    std::lock_guard<std::recursive_mutex> lock(m);
+    return lists.empty() ? 0 : lists.back().size();
+  }
+};
+
+RoomClientOptions clientOptions(uint16_t port, const std::string& room, const std::string& name,
+                                room::Role role = room::Role::kRig, const std::string& token = "") {
+  RoomClientOptions o;
+  o.port = port;
+  o.join.room = room;
+  o.join.name = name;
+  o.join.role = role;
+  o.join.token = token;
+  o.send_queue_length = 4096;  // the tests check the server's queues, not the client's
+  return o;
+}
+
+std::unique_ptr<RoomClient> joined(Inbox* inbox, const RoomClientOptions& o) {
+  auto c = std::make_unique<RoomClient>(inbox->wire(o));
+  std::string error;
+  EXPECT_TRUE(c->connect(&error)) << error;
+  return c;
+}
+
+// A WebSocket client that does exactly what it is told (and reads only when asked).
+class RawClient {
+ public:
+  struct Message {
+    bool ok = false, text = false;
+    std::string data;
+    beast::error_code ec;
+    websocket::close_reason close;
+  };
+
+  explicit RawClient(uint16_t port, int receive_buffer = 0) : ws_(ioc_) {
+    tcp::socket& s = ws_.next_layer();
+    s.open(tcp::v4());
+    if (receive_buffer > 0) s.set_option(net::socket_base::receive_buffer_size(receive_buffer));
+    s.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+    ws_.handshake("127.0.0.1", "/ws");
+  }
+  beast::error_code sendText(const std::string& s) {
+    beast::error_code ec;
+    ws_.text(true);
+    ws_.write(net::buffer(s), ec);
+    return ec;
+  }
+  beast::error_code sendBinary(const std::vector<uint8_t>& b) {
+    beast::error_code ec;
+    ws_.binary(true);
+    ws_.write(net::buffer(b), ec);
+    return ec;
+  }
+  beast::error_code join(const std::string& room, const std::string& token = "",
+                         room::Role role = room::Role::kRig) {
+    room::JoinRequest j;
+    j.room = room;
+    j.name = "raw";
+    j.token = token;
+    j.role = role;
+    return sendText(room::encodeJoin(j));
+  }
+  Message read(std::chrono::milliseconds timeout = 3000ms) {
+    Message m;
+    bool done = false;
+    buffer_.consume(buffer_.size());
+    ws_.async_read(buffer_, [&](beast::error_code ec, size_t) {
+      done = true;
+      m.ec = ec;
+    });
+    ioc_.restart();
+    ioc_.run_for(timeout);
+    if (!done) {
+      beast::error_code ignored;
+      ws_.next_layer().cancel(ignored);
+      ioc_.restart();
+      ioc_.run();
+      m.ec = beast::error::timeout;
+      return m;
+    }
+    m.ok = !m.ec;
+    m.text = ws_.got_text();
+    m.data = beast::buffers_to_string(buffer_.data());
+    if (m.ec == websocket::error::closed) m.close = ws_.reason();
+    return m;
+  }
+  // Reads until the server's "error"; returns its reason, then expects the close.
+  std::string readErrorAndClose(websocket::close_code expected_code) {
+    for (int i = 0; i < 10000; ++i) {  // skips hand data and lists
+      Message m = read();
+      if (!m.ok) return "no error message (" + m.ec.message() + ")";
+      if (!m.text) continue;
+      const room::ServerMessage s = room::parseServerMessage(m.data);
+      if (s.type != room::ServerMessage::Type::kError) continue;
+      const Message c = read();
+      EXPECT_EQ(c.ec, websocket::error::closed) << c.ec.message();
+      EXPECT_EQ(c.close.code, expected_code);
+      return s.reason;
+    }
+    return "no error message";
+  }
+  // The welcome, skipping nothing (it is the first message after a good join).
+  room::ServerMessage readWelcome() {
+    const Message m = read();
+    return room::parseServerMessage(m.ok && m.text ? m.data : "");
+  }
+
+ private:
+  net::io_context ioc_;
+  websocket::stream<tcp::socket> ws_;
+  beast::flat_buffer buffer_;
+};
+
+struct HttpReply {
+  int status = 0;
+  std::string body, content_type;
+};
+
+HttpReply httpGet(uint16_t port, const std::string& target, http::verb verb = http::verb::get) {
+  net::io_context ioc;
+  tcp::socket s(ioc);
+  s.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+  http::request<http::empty_body> req(verb, target, 11);
+  req.set(http::field::host, "127.0.0.1");
+  http::write(s, req);
+  beast::flat_buffer b;
+  http::response_parser<http::string_body> parser;
+  parser.skip(verb == http::verb::head);  // a HEAD answer announces a body it does not send
+  http::read(s, b, parser);
+  const auto& res = parser.get();
+  return {int(res.result_int()), res.body(), std::string(res[http::field::content_type])};
+}
+
+// Status of a WebSocket upgrade request as a browser would send it.
+int upgradeStatus(uint16_t port, const std::string& origin, const std::string& host) {
+  net::io_context ioc;
+  tcp::socket s(ioc);
+  s.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+  http::request<http::empty_body> req(http::verb::get, "/ws", 11);
+  req.set(http::field::host, host);
+  req.set(http::field::upgrade, "websocket");
+  req.set(http::field::connection, "Upgrade");
+  req.set(http::field::sec_websocket_key, "dGhlIHNhbXBsZSBub25jZQ==");
+  req.set(http::field::sec_websocket_version, "13");
+  if (!origin.empty()) req.set(http::field::origin, origin);
+  http::write(s, req);
+  beast::flat_buffer b;
+  http::response_parser<http::empty_body> parser;
+  http::read_header(s, b, parser);
+  return int(parser.get().result_int());
+}
+
+RoomServerOptions loopback() {
+  RoomServerOptions o;
+  o.bind_address = "127.0.0.1";
+  o.port = 0;
+  return o;
+}
+
+uint64_t kicked(const RoomServer& server, const std::string& reason) {
+  const auto k = server.stats().kicked;
+  const auto it = k.find(reason);
+  return it == k.end() ? 0 : it->second;
+}
+
+// Sends `count` payloads of `size` bytes at 1 kHz: 20 times the live rate of a rig (2 hands at
+// 25 fps), and still no back-to-back burst (see kBurstFactor in room_server.cpp).
+void sendSome(RoomClient& from, size_t count, size_t size = 64) {
+  const auto t0 = Clock::now();
+  for (uint32_t i = 0; i < count; ++i) {
+    std::this_thread::sleep_until(t0 + i * 1ms);
+    ASSERT_TRUE(from.send(makePayload(i, size)));
+  }
+}
+
+// Waits until `to` has `total` hand messages from `sender` in all.
+void expectHands(Inbox& to, uint32_t sender, size_t total) {
+  EXPECT_TRUE(to.waitFor([&] { return to.handsFrom(sender) >= total; }))
+      << to.handsFrom(sender) << " of " << total;
+  std::this_thread::sleep_for(20ms);  // extra ones would show now
+  EXPECT_EQ(to.handsFrom(sender), total);
+}
+
+// (a) Two rigs and a viewer in r1, a rig in r2: distinct seats, membership lists, 100 messages
+// each way in order with the sender's id and seat, the viewer sees both, r2 sees nothing.
+void twoRigsExchangeHands(int threads) {
+  RoomServerOptions o = loopback();
+  o.threads = threads;
+  RoomServer server(o);
+  server.start();
+  ASSERT_NE(server.port(), 0);
+  Inbox ia, ib, iv, ic;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "alice"));
+  auto b = joined(&ib, clientOptions(server.port(), "r1", "bob"));
+  auto v = joined(&iv, clientOptions(server.port(), "r1", "browser", room::Role::kViewer));
+  auto c = joined(&ic, clientOptions(server.port(), "r2", "carol"));
+  ASSERT_TRUE(a->connected() && b->connected() && v->connected() && c->connected());
+
+  const room::ParticipantInfo pa = a->self(), pb = b->self();
+  EXPECT_EQ(pa.seat, 0);
+  EXPECT_EQ(pb.seat, 1);
+  EXPECT_EQ(c->self().seat, 0);  // seats are per room
+  EXPECT_EQ(v->self().seat, -1);
+  EXPECT_NE(pa.id, pb.id);
+  EXPECT_EQ(pa.seat_pose, room::seatPose(0, room::SeatLayout()));
+  EXPECT_EQ(pb.seat_pose, room::seatPose(1, room::SeatLayout()));
+  ASSERT_TRUE(ia.waitFor([&] { return !ia.lists.empty() && ia.lists.back().size() == 3; }));
+  {
+    std::lock_guard<std::recursive_mutex> lock(ia.m);
+    const auto& list = ia.lists.back();
+    EXPECT_EQ(list[0].name, "alice");
+    EXPECT_EQ(list[1].name, "bob");
+    EXPECT_EQ(list[1].seat, 1);
+    EXPECT_EQ(list[2].role, room::Role::kViewer);
+  }
+  EXPECT_TRUE(ic.waitFor([&] { return ic.lastListSize() == 1; }));
+
+  const auto t0 = Clock::now();
+  for (uint32_t i = 0; i < 100; ++i) {
+    std::this_thread::sleep_until(t0 + i * 1ms);  // as sendSome, both rigs at once
+    ASSERT_TRUE(a->send(makePayload(i, 100 + i)));
+    ASSERT_TRUE(b->send(makePayload(1000 + i, 50)));
+  }
+  ASSERT_TRUE(ib.waitFor([&] { return ib.hands.size() >= 100; }));
+  ASSERT_TRUE(ia.waitFor([&] { return ia.hands.size() >= 100; }));
+  ASSERT_TRUE(iv.waitFor([&] { return iv.hands.size() >= 200; }));
+  std::this_thread::sleep_for(50ms);  // anything extra (echoes, strays) would show now
+  {
+    std::lock_guard<std::recursive_mutex> lock(ib.m);
+    ASSERT_EQ(ib.hands.size(), 100u);
+    for (uint32_t i = 0; i < 100; ++i) {
+      EXPECT_EQ(ib.hands[i].index, i);
+      EXPECT_EQ(ib.hands[i].size, 100 + i);
+      EXPECT_EQ(ib.hands[i].header.sender, pa.id);
+      EXPECT_EQ(ib.hands[i].header.seat, 0u);
+      EXPECT_EQ(ib.hands[i].header.sequence, i);
+      EXPECT_GT(ib.hands[i].header.server_time_us, 0u);
+    }
+  }
+  {
+    std::lock_guard<std::recursive_mutex> lock(ia.m);
+    ASSERT_EQ(ia.hands.size(), 100u);
+    for (uint32_t i = 0; i < 100; ++i) {
+      EXPECT_EQ(ia.hands[i].index, 1000 + i);
+      EXPECT_EQ(ia.hands[i].header.sender, pb.id);
+      EXPECT_EQ(ia.hands[i].header.seat, 1u);
+    }
+  }
+  EXPECT_EQ(iv.handsFrom(pa.id), 100u);
+  EXPECT_EQ(iv.handsFrom(pb.id), 100u);
+  EXPECT_EQ(ic.hands.size(), 0u);
+
+  const RoomServerStats st = server.stats();
+  ASSERT_EQ(st.rooms.size(), 2u);
+  EXPECT_EQ(st.rooms[0].name, "r1");
+  EXPECT_EQ(st.rooms[0].rigs, 2u);
+  EXPECT_EQ(st.rooms[0].viewers, 1u);
+  EXPECT_EQ(st.rooms[0].messages_in, 200u);
+  EXPECT_EQ(st.dropped, 0u);
+  ASSERT_EQ(st.participants.size(), 4u);
+  EXPECT_EQ(st.participants[0].messages_in, 100u);
+  EXPECT_GE(st.participants[0].messages_out, 100u);
+  EXPECT_TRUE(st.kicked.empty());
+  server.stop();
+}
+
+TEST(RoomServer, TwoRigsExchangeHandsThroughARoom) { twoRigsExchangeHands(1); }
+TEST(RoomServer, TwoRigsExchangeHandsWithTwoServerThreads) { twoRigsExchangeHands(2); }
+
+// Seats: lowest free first, a full room refuses rigs (viewers still welcome), a freed seat is
+// given again.
+TEST(RoomServer, SeatsAndFullRoom) {
+  RoomServerOptions o = loopback();
+  o.seats.seats = 2;
+  RoomServer server(o);
+  server.start();
+  Inbox ia, ib, ic, iv, id;
+  auto a = joined(&ia, clientOptions(server.port(), "r", "a"));
+  auto b = joined(&ib, clientOptions(server.port(), "r", "b"));
+  RoomClient c(ic.wire(clientOptions(server.port(), "r", "c")));
+  std::string error;
+  EXPECT_FALSE(c.connect(&error));
+  EXPECT_EQ(error.rfind("room_full", 0), 0u) << error;
+  auto v = joined(&iv, clientOptions(server.port(), "r", "v", room::Role::kViewer));
+  a->close();
+  ASSERT_TRUE(ib.waitFor([&] { return !ib.lists.empty() && ib.lists.back().size() == 2; }));
+  auto d = joined(&id, clientOptions(server.port(), "r", "d"));
+  EXPECT_EQ(d->self().seat, 0);
+  EXPECT_EQ(kicked(server, "room_full"), 1u);
+}
+
+// (b) Token: missing or wrong -> error "bad_token" and closed; right -> welcome.
+TEST(RoomServer, Token) {
+  RoomServerOptions o = loopback();
+  o.token = "s3cret";
+  RoomServer server(o);
+  server.start();
+  for (const std::string token : {"", "s3cre", "s3cret!", "S3CRET"}) {
+    RawClient raw(server.port());
+    ASSERT_FALSE(raw.join("r1", token));
+    EXPECT_EQ(raw.readErrorAndClose(websocket::close_code::policy_error), "bad_token") << token;
+    Inbox inbox;
+    RoomClient client(inbox.wire(clientOptions(server.port(), "r1", "x", room::Role::kRig, token)));
+    std::string error;
+    EXPECT_FALSE(client.connect(&error));
+    EXPECT_EQ(error.rfind("bad_token", 0), 0u) << error;
+  }
+  RawClient raw(server.port());
+  ASSERT_FALSE(raw.join("r1", "s3cret"));
+  const room::ServerMessage w = raw.readWelcome();
+  EXPECT_EQ(w.type, room::ServerMessage::Type::kWelcome) << w.detail;
+  Inbox inbox;
+  auto client = joined(&inbox, clientOptions(server.port(), "r1", "x", room::Role::kRig, "s3cret"));
+  EXPECT_TRUE(client->connected());
+  EXPECT_EQ(kicked(server, "bad_token"), 8u);
+}
+
+// (c) Protocol violations close only the offender; A <-> B keep exchanging every message.
+TEST(RoomServer, MisbehavingClientsDoNotAffectOthers) {
+  RoomServer server(loopback());
+  server.start();
+  Inbox ia, ib;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "a"));
+  auto b = joined(&ib, clientOptions(server.port(), "r1", "b"));
+  const uint32_t ida = a->self().id, idb = b->self().id;
+  sendSome(*a, 50);
+  expectHands(ib, ida, 50);
+
+  struct Case {
+    std::function<void(RawClient&)> act;
+    std::string reason;
+  };
+  const std::vector<Case> cases = {
+      {[](RawClient& r) { r.sendText("{\"type\":\"join\",\"room\":"); }, "malformed"},
+      {[](RawClient& r) { r.sendText("not json at all"); }, "malformed"},
+      {[](RawClient& r) { r.sendBinary(makePayload(1, 100)); }, "not_joined"},
+      {[](RawClient& r) { r.sendText(R"({"type":"ping","id":1})"); }, "not_joined"},
+      {[](RawClient& r) { r.sendText(R"({"type":"join","room":"bad room"})"); }, "bad_join"},
+      {[](RawClient& r) { r.sendText(R"({"type":"dance"})"); }, "unknown_type"},
+      {[](RawClient& r) {
+         r.join("r1");
+         r.join("r1");
+       },
+       "already_joined"},
+      {[](RawClient& r) {
+         r.join("r1", "", room::Role::kViewer);
+         r.sendBinary(makePayload(1, 100));
+       },
+       "viewer_cannot_send"},
+      {[](RawClient& r) {
+         r.join("r1");
+         r.sendText("{\"type\":\"ping\"}{}");
+       },
+       "malformed"},
+  };
+  for (const Case& c : cases) {
+    RawClient raw(server.port());
+    c.act(raw);
+    // Meanwhile the room's traffic goes on.
+    sendSome(*a, 20, 200);
+    sendSome(*b, 20, 200);
+    EXPECT_EQ(raw.readErrorAndClose(websocket::close_code::policy_error), c.reason);
+  }
+  sendSome(*a, 50);
+  sendSome(*b, 50);
+  expectHands(ib, ida, 50 + 20 * cases.size() + 50);
+  expectHands(ia, idb, 20 * cases.size() + 50);
+  EXPECT_TRUE(a->connected() && b->connected());
+  EXPECT_EQ(server.stats().dropped, 0u);
+  EXPECT_EQ(kicked(server, "malformed"), 3u);
+
+  // A ping after the join is answered (and nothing is closed).
+  RawClient raw(server.port());
+  raw.join("r1");
+  ASSERT_EQ(raw.readWelcome().type, room::ServerMessage::Type::kWelcome);
+  raw.sendText(R"({"type":"ping","id":"p1"})");
+  for (int i = 0; i < 50; ++i) {
+    const RawClient::Message m = raw.read();
+    ASSERT_TRUE(m.ok) << m.ec.message();
+    const room::ServerMessage s = room::parseServerMessage(m.text ? m.data : "");
+    if (s.type != room::ServerMessage::Type::kPong) continue;
+    EXPECT_EQ(s.ping_id, "\"p1\"");
+    break;
+  }
+}
+
+// (d) An oversized message (2 MiB, limit 1 MiB) closes its sender only; exactly the limit is
+// fine.
+TEST(RoomServer, OversizedMessageClosesOnlyItsSender) {
+  RoomServer server(loopback());
+  server.start();
+  Inbox ia, ib;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "a"));
+  auto b = joined(&ib, clientOptions(server.port(), "r1", "b"));
+  const uint32_t ida = a->self().id;
+
+  RawClient big(server.port());
+  big.join("r1");
+  ASSERT_EQ(big.readWelcome().type, room::ServerMessage::Type::kWelcome);
+  std::thread sender([&] { big.sendBinary(std::vector<uint8_t>(2 << 20, 1)); });  // may fail midway
+  sendSome(*a, 30, 1000);
+  sender.join();
+  EXPECT_EQ(big.readErrorAndClose(websocket::close_code::too_big), "too_large");
+
+  RawClient text(server.port());
+  text.join("r1");
+  ASSERT_EQ(text.readWelcome().type, room::ServerMessage::Type::kWelcome);
+  std::thread text_sender([&] { text.sendText(std::string(2 << 20, ' ')); });
+  text_sender.join();
+  EXPECT_EQ(text.readErrorAndClose(websocket::close_code::too_big), "too_large");
+
+  sendSome(*a, 30);
+  expectHands(ib, ida, 60);
+  // The limit itself passes: B gets the full 1 MiB.
+  ASSERT_TRUE(a->send(std::vector<uint8_t>(size_t(1) << 20, 3)));
+  ASSERT_TRUE(ib.waitFor([&] { return ib.hands.size() == 61; }));
+  EXPECT_EQ(ib.hands.back().size, size_t(1) << 20);
+  EXPECT_EQ(kicked(server, "too_large"), 2u);
+  EXPECT_TRUE(b->connected());
+}
+
+// (e) A client that joins and never reads while A streams 2000 x 20 kB: B keeps receiving with
+// low latency, the stalled client's drop counter grows, and after stall_timeout it is cut.
+TEST(RoomServer, StalledClientDoesNotStallOthers) {
+  RoomServerOptions o = loopback();
+  o.stall_timeout = 1.0;
+  RoomServer server(o);
+  server.start();
+  Inbox ia, ib;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "a"));
+  auto b = joined(&ib, clientOptions(server.port(), "r1", "b"));
+  const uint32_t ida = a->self().id;
+  RawClient stalled(server.port(), 4096);
+  stalled.join("r1");
+  ASSERT_TRUE(ib.waitFor([&] { return ib.lastListSize() == 3; }));
+  uint32_t stalled_id = 0;
+  for (const auto& p : server.stats().participants)
+    if (p.name == "raw") stalled_id = p.id;
+  ASSERT_NE(stalled_id, 0u);
+
+  constexpr uint32_t kCount = 2000;
+  uint64_t stalled_drops_midway = 0;
+  const auto t0 = Clock::now();
+  for (uint32_t i = 0; i < kCount; ++i) {
+    std::this_thread::sleep_until(t0 + i * 1ms);  // 1 kHz, 160 Mbit/s
+    ASSERT_TRUE(a->send(makePayload(i, 20000)));
+    if (i == 700)
+      for (const auto& p : server.stats().participants)
+        if (p.id == stalled_id) stalled_drops_midway = p.dropped;
+  }
+  // B has everything the server did not drop for it.
+  const uint32_t idb = b->self().id;
+  const auto droppedForB = [&] {
+    for (const auto& p : server.stats().participants)
+      if (p.id == idb) return p.dropped;
+    return uint64_t(0);
+  };
+  EXPECT_TRUE(ib.waitFor([&] { return ib.hands.size() + droppedForB() >= kCount; }, 3000ms));
+  const RoomServerStats st = server.stats();
+  std::vector<double> ages;
+  {
+    std::lock_guard<std::recursive_mutex> lock(ib.m);
+    for (const auto& h : ib.hands) ages.push_back(h.age_ms);
+  }
+  std::sort(ages.begin(), ages.end());
+  const double p50 = ages[ages.size() / 2], p99 = ages[ages.size() * 99 / 100];
+  std::printf(
+      "B received %zu of %u, latency p50 %.2f ms, p99 %.2f ms, max %.2f ms; stalled "
+      "dropped %llu by message 700; server dropped %llu in all\n",
+      ages.size(), kCount, p50, p99, ages.back(), (unsigned long long)stalled_drops_midway,
+      (unsigned long long)st.dropped);
+  EXPECT_GE(ages.size(), kCount * 99 / 100);
+  EXPECT_LT(p99, 200.0);
+  EXPECT_GT(stalled_drops_midway, 0u);
+  EXPECT_EQ(kicked(server, "slow_client"), 1u);
+  EXPECT_EQ(server.stats().participants.size(), 2u);  // the stalled one has been cut
+  EXPECT_EQ(ib.handsFrom(ida), ages.size());
+  EXPECT_TRUE(a->connected() && b->connected());
+}
+
+// (f) Leaving: B disconnects, A gets the new list.
+TEST(RoomServer, LeaveUpdatesParticipants) {
+  RoomServer server(loopback());
+  server.start();
+  Inbox ia, ib;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "a"));
+  auto b = joined(&ib, clientOptions(server.port(), "r1", "b"));
+  ASSERT_TRUE(ia.waitFor([&] { return ia.lastListSize() == 2; }));
+  b->close();
+  ASSERT_TRUE(ia.waitFor([&] { return ia.lastListSize() == 1; }));
+  {
+    std::lock_guard<std::recursive_mutex> lock(ia.m);
+    EXPECT_EQ(ia.lists.back()[0].id, a->self().id);
+  }
+  EXPECT_TRUE(ib.closed.empty());  // no on_closed after our own close()
+  // A raw client that just drops the TCP connection leaves too.
+  {
+    RawClient raw(server.port());
+    raw.join("r1");
+    ASSERT_TRUE(ia.waitFor([&] { return ia.lastListSize() == 2; }));
+  }
+  ASSERT_TRUE(ia.waitFor([&] { return ia.lastListSize() == 1; }));
+}
+
+// (g) Static files: / is index.html, traversal is refused, /ws without upgrade is not a file.
+TEST(RoomServer, StaticFiles) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("room_www_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "js");
+  std::ofstream(dir / "index.html") << "<!doctype html><title>room</title>";
+  std::ofstream(dir / "js" / "client.js") << "console.log(1);";
+  fs::create_symlink("/etc/passwd", dir / "passwd");
+  RoomServerOptions o = loopback();
+  o.static_root = dir.string();
+  RoomServer server(o);
+  server.start();
+
+  HttpReply r = httpGet(server.port(), "/");
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body, "<!doctype html><title>room</title>");
+  EXPECT_EQ(r.content_type, "text/html; charset=utf-8");
+  r = httpGet(server.port(), "/js/client.js?v=2");
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.content_type, "text/javascript; charset=utf-8");
+  r = httpGet(server.port(), "/", http::verb::head);
+  EXPECT_EQ(r.status, 200);
+  for (const char* t : {"/../etc/passwd", "/js/../../etc/passwd", "/%2e%2e/etc/passwd",
+                        "/..%2f..%2fetc%2fpasswd", "/..\\..\\etc\\passwd"}) {
+    r = httpGet(server.port(), t);
+    EXPECT_EQ(r.status, 400) << t;
+    EXPECT_EQ(r.body.find("root:"), std::string::npos) << t;
+  }
+  for (const char* t : {"/passwd", "/%2fetc%2fpasswd", "//etc/passwd", "/nope.html"}) {
+    r = httpGet(server.port(), t);
+    EXPECT_EQ(r.status, 404) << t;
+    EXPECT_EQ(r.body.find("root:"), std::string::npos) << t;
+  }
+  EXPECT_EQ(httpGet(server.port(), "/ws").status, 426);
+  EXPECT_EQ(httpGet(server.port(), "/", http::verb::post).status, 405);
+  // The WebSocket keeps working next to the files.
+  Inbox inbox;
+  auto c = joined(&inbox, clientOptions(server.port(), "r1", "a"));
+  EXPECT_TRUE(c->connected());
+  server.stop();
+  fs::remove_all(dir);
+
+  // Without a root nothing is served.
+  RoomServer bare(loopback());
+  bare.start();
+  EXPECT_EQ(httpGet(bare.port(), "/").status, 404);
+}
+
+// Browser pages of other origins, and DNS-rebinding pages (their own name in Host), cannot
+// open the loopback server's WebSocket; the server's own pages and non-browsers can.
+TEST(RoomServer, BrowserOrigins) {
+  RoomServerOptions o = loopback();
+  o.allowed_origins = {"http://localhost:5173"};
+  RoomServer server(o);
+  server.start();
+  const std::string here = "127.0.0.1:" + std::to_string(server.port());
+  EXPECT_EQ(upgradeStatus(server.port(), "", here), 101);                // no Origin: not a browser
+  EXPECT_EQ(upgradeStatus(server.port(), "http://" + here, here), 101);  // its own page
+  EXPECT_EQ(upgradeStatus(server.port(), "http://localhost:5173", here), 101);  // allowed
+  EXPECT_EQ(upgradeStatus(server.port(), "http://LOCALHOST:" + std::to_string(server.port()),
+                          "localhost:" + std::to_string(server.port())),
+            101);
+  EXPECT_EQ(upgradeStatus(server.port(), "http://[::1]:80", "[::1]:80"), 101);
+  EXPECT_EQ(upgradeStatus(server.port(), "https://evil.example", here), 403);
+  EXPECT_EQ(upgradeStatus(server.port(), "http://localhost:5174", here), 403);
+  EXPECT_EQ(upgradeStatus(server.port(), "null", here), 403);  // sandboxed or file: pages
+  const std::string rebound = "evil.example:" + std::to_string(server.port());
+  EXPECT_EQ(upgradeStatus(server.port(), "http://" + rebound, rebound), 403);
+}
+
+// Unjoined connections time out; max_clients is enforced with an error, not a hang.
+TEST(RoomServer, JoinTimeoutAndServerFull) {
+  RoomServerOptions o = loopback();
+  o.join_timeout = 0.3;
+  o.max_clients = 2;
+  RoomServer server(o);
+  server.start();
+  RawClient idle(server.port());
+  Inbox ia;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "a"));
+  RawClient third(server.port());
+  EXPECT_EQ(third.readErrorAndClose(websocket::close_code::try_again_later), "server_full");
+  EXPECT_EQ(idle.readErrorAndClose(websocket::close_code::policy_error), "join_timeout");
+  EXPECT_EQ(kicked(server, "join_timeout"), 1u);
+  EXPECT_TRUE(a->connected());  // joined in time, not affected
+}
+
+// Keep-alive: the server pings every idle_timeout / 2 and drops a peer that has sent nothing
+// (not even a pong) for idle_timeout; RoomClients answer and stay. A RoomClient that hears
+// nothing (a server gone without closing; here one that does not ping) gives up likewise.
+TEST(RoomServer, IdlePeersAreDropped) {
+  RoomServerOptions o = loopback();
+  o.idle_timeout = 0.4;
+  RoomServer server(o);
+  server.start();
+  Inbox ia;
+  RoomClientOptions co = clientOptions(server.port(), "r1", "a");
+  co.idle_timeout = 1.0;  // the server's pings every 0.2 s keep it content
+  auto a = joined(&ia, co);
+  RawClient mute(server.port());  // never reads, so never answers a ping
+  mute.join("r1");
+  ASSERT_TRUE(ia.waitFor([&] { return ia.lastListSize() == 2; }));
+  EXPECT_TRUE(ia.waitFor([&] { return ia.lastListSize() == 1; }, 2000ms));
+  std::this_thread::sleep_for(1200ms);
+  EXPECT_TRUE(a->connected());
+  EXPECT_EQ(server.stats().participants.size(), 1u);
+
+  o.idle_timeout = 0;  // a server that never pings: as good as gone for a quiet client
+  RoomServer quiet(o);
+  quiet.start();
+  Inbox ib;
+  co.port = quiet.port();
+  co.idle_timeout = 0.3;
+  const auto t0 = Clock::now();
+  auto b = joined(&ib, co);
+  EXPECT_TRUE(ib.waitFor([&] { return !ib.closed.empty(); }, 2000ms));
+  EXPECT_GT(Clock::now() - t0, 250ms);
+  EXPECT_FALSE(b->connected());
+}
+
+// (h) stop() with joined, unjoined and stalled clients returns promptly and tells the clients.
+TEST(RoomServer, StopWithConnectedClientsIsPrompt) {
+  auto server = std::make_unique<RoomServer>(loopback());
+  server->start();
+  const uint16_t port = server->port();
+  Inbox ia, ib;
+  auto a = joined(&ia, clientOptions(port, "r1", "a"));
+  auto b = joined(&ib, clientOptions(port, "r1", "b"));
+  RawClient unjoined(port);
+  RawClient stalled(port, 4096);
+  stalled.join("r1");
+  for (uint32_t i = 0; i < 400; ++i) a->send(makePayload(i, 20000));  // fills the stalled pipe
+  ASSERT_TRUE(ib.waitFor([&] { return ib.hands.size() >= 300; }));
+  const auto t0 = Clock::now();
+  server->stop();
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::printf("stop() took %.3f s\n", seconds);
+  EXPECT_LT(seconds, 1.6);
+  ASSERT_TRUE(ia.waitFor([&] { return !ia.closed.empty(); }));
+  EXPECT_EQ(ia.closed.rfind("shutdown", 0), 0u) << ia.closed;
+  EXPECT_FALSE(a->connected());
+  EXPECT_FALSE(a->send(makePayload(0, 10)));
+  server.reset();  // destroying a stopped server is fine too
+  // The port is free again: nothing is left listening.
+  net::io_context ioc;
+  tcp::socket s(ioc);
+  beast::error_code ec;
+  s.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port), ec);
+  EXPECT_TRUE(ec);
+}
+
+TEST(RoomServer, BadOptionsAndAddresses) {
+  RoomServerOptions o = loopback();
+  o.queue_length = 0;
+  EXPECT_THROW(RoomServer{o}, std::invalid_argument);
+  o = loopback();
+  o.bind_address = "not an address";
+  RoomServer s1(o);
+  EXPECT_THROW(s1.start(), std::runtime_error);
+  o = loopback();
+  o.static_root = "/nonexistent/room/www";
+  RoomServer s2(o);
+  EXPECT_THROW(s2.start(), std::runtime_error);
+  Inbox inbox;
+  RoomClientOptions c = clientOptions(1, "r1", "x");  // nothing listens on port 1
+  c.connect_timeout = 1.0;
+  RoomClient client(inbox.wire(c));
+  std::string error;
+  EXPECT_FALSE(client.connect(&error));
+  EXPECT_EQ(error.rfind("connect:", 0), 0u) << error;
+}
+
+}  // namespace
+}  // namespace cvephands
