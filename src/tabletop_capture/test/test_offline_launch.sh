@@ -37,8 +37,11 @@ if ! "$RENDER_BAG" --out "$WORK/test.bag" --frames $FRAMES \
   junit "$name" "render_bag failed" "$LOG"; exit 0
 fi
 start=$(date +%s)
+# Half speed: the test checks that every frame set comes through, not the speed; on a loaded
+# 2-core CI machine the whole pipeline (psfs, mpf, mesher) at full speed can make one camera's
+# image miss the synchroniser's 0.2 s timeout.
 timeout 120 roslaunch -p "$PORT" "$ROOT/launch/offline.launch" bag:="$WORK/test.bag" \
-  cameras:=$CAMERAS output_dir:="$WORK/out" >> "$LOG" 2>&1
+  cameras:=$CAMERAS rate:=0.5 output_dir:="$WORK/out" >> "$LOG" 2>&1
 rc=$?
 took=$(( $(date +%s) - start ))
 echo "[offline_launch] roslaunch exit $rc after ${took} s" | tee -a "$LOG"
