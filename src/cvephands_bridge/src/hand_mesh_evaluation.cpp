@@ -1,16 +1,14 @@
 #include "cvephands_bridge/hand_mesh_evaluation.h"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
 #include "cvephands_bridge/mesh_components.h"
-#include "psfs_reconstruction/gaussian_mixture.h"
-#include "psfs_reconstruction/reconstructor.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "cvephands_bridge/sim_hand_volumes.h"
 #include "tabletop_capture/sim/surface_samples.h"
 
 namespace cvephands {
@@ -70,16 +68,6 @@ HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
   if (o.frames < 0) throw std::invalid_argument("evaluateHandMeshes: frames must be >= 0");
   if (!(o.iso > 0.0 && o.iso < 1.0)) throw std::invalid_argument("evaluateHandMeshes: iso in (0, 1)");
   if (!(o.border_voxels >= 0.0)) throw std::invalid_argument("evaluateHandMeshes: border_voxels < 0");
-  sim::SimOptions so;
-  so.script = o.script;
-  so.seed = static_cast<uint64_t>(o.seed);
-  so.num_cameras = o.cameras;
-  sim::SimulatedRig rig(so);
-  psfs::ReconstructorParams rp;
-  rp.hand_roi_edge = o.hand_edge;
-  rp.hand_roi_voxels = o.hand_voxels;
-  psfs::Reconstructor recon(psfs::GaussianMixture2D::load(o.skin_model), rp);
-
   MarchingCubesOptions mo;
   mo.iso = static_cast<float>(std::floor(255.0 * o.iso) + 0.5);
   mo.threads = 1;
@@ -93,29 +81,27 @@ HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
   // show (the box cuts are handled by the border band instead).
   sso.clothing_interface = true;
 
-  const int total = o.frames > 0 ? so.empty_frames + o.frames : rig.scriptFrames();
-  const int scored_total = (total - so.empty_frames + o.every - 1) / o.every;
+  SimHandVolumeOptions so;
+  so.script = o.script;
+  so.frames = o.frames;
+  so.every = o.every;
+  so.seed = o.seed;
+  so.cameras = o.cameras;
+  so.skin_model = o.skin_model;
+  so.hand_edge = o.hand_edge;
+  so.hand_voxels = o.hand_voxels;
   HandMeshEvalResult r;
   std::vector<int> both_frames;
   std::vector<std::array<TriangleMesh, 4>> both_meshes;  // kept only for the picture
-  for (int f = 0; f < total; ++f) {
-    const bool scored = f >= so.empty_frames && (f - so.empty_frames) % o.every == 0;
-    if (!scored && f >= so.empty_frames) continue;  // the background is learned; others skipped
-    const sim::SimFrame frame = rig.render(f);
-    std::vector<Eigen::Vector3d> rois;
-    std::vector<int> sides;
-    if (frame.truth.person_present) {
-      if (frame.truth.left_hand_in_workspace) rois.push_back(frame.truth.left_hand), sides.push_back(0);
-      if (frame.truth.right_hand_in_workspace) rois.push_back(frame.truth.right_hand), sides.push_back(1);
-    }
-    const psfs::FrameResult res = recon.process(frame.images, rig.rig().cameras, rois);
-    if (!scored || res.status != psfs::FrameResult::Status::kReconstructed) continue;
+  visitSimHandFrames(so, [&](const SimHandFrame& frame) {
+    const int f = frame.rig_frame;
+    const std::vector<int>& sides = frame.sides;
     ++r.frames_scored;
-    const std::vector<sim::Primitive> person = rig.person(f);
+    const std::vector<sim::Primitive> person = frame.rig->person(f);
     TriangleMesh meshes[2][2];  // [mode][side]
     bool meshed[2] = {false, false};
-    for (size_t h = 0; h < rois.size(); ++h) {
-      const psfs::ProbabilityVolume& vol = res.hands[h];
+    for (size_t h = 0; h < sides.size(); ++h) {
+      const psfs::ProbabilityVolume& vol = frame.result->hands[h];
       const ProbabilityGridView g = viewOf(vol);
       HandMeshSample s;
       s.frame = f;
@@ -158,8 +144,8 @@ HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
         both_meshes.push_back({meshes[0][0], meshes[0][1], meshes[1][0], meshes[1][1]});
       }
     }
-    if (o.progress) o.progress(r.frames_scored, scored_total);
-  }
+    if (o.progress) o.progress(r.frames_scored, frame.count);
+  });
   if (!both_frames.empty()) {
     const size_t mid = both_frames.size() / 2;
     r.picture_frame = both_frames[mid];

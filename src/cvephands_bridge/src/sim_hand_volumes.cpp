@@ -3,15 +3,15 @@
 #include <stdexcept>
 
 #include "psfs_reconstruction/gaussian_mixture.h"
-#include "psfs_reconstruction/reconstructor.h"
-#include "tabletop_capture/sim/simulated_rig.h"
 
 namespace cvephands {
 
-std::vector<SimHandVolume> recordSimHandVolumes(const SimHandVolumeOptions& o) {
+void visitSimHandFrames(const SimHandVolumeOptions& o,
+                        const std::function<void(const SimHandFrame&)>& visit) {
   namespace sim = tabletop_capture::sim;
   if (o.first_frame < 0 || o.frames < 0)
-    throw std::invalid_argument("recordSimHandVolumes: first_frame and frames must be >= 0");
+    throw std::invalid_argument("visitSimHandFrames: first_frame and frames must be >= 0");
+  if (o.every < 1) throw std::invalid_argument("visitSimHandFrames: every must be >= 1");
   sim::SimOptions so;
   so.script = o.script;
   so.seed = static_cast<uint64_t>(o.seed);
@@ -23,33 +23,50 @@ std::vector<SimHandVolume> recordSimHandVolumes(const SimHandVolumeOptions& o) {
   rp.hand_roi_voxels = o.hand_voxels;
   psfs::Reconstructor recon(psfs::GaussianMixture2D::load(o.skin_model), rp);
 
-  std::vector<SimHandVolume> out;
-  const int begin = so.empty_frames + o.first_frame, end = begin + o.frames;
+  const int begin = so.empty_frames + o.first_frame;
+  const int end = o.frames > 0 ? begin + o.frames : rig.scriptFrames();
+  SimHandFrame out;
+  out.rig = &rig;
+  out.count = end > begin ? (end - begin + o.every - 1) / o.every : 0;
   for (int f = 0; f < end; ++f) {
-    if (f >= so.empty_frames && f < begin) continue;  // background learned; skipped frames
+    const bool wanted = f >= begin && (f - begin) % o.every == 0;
+    if (f >= so.empty_frames && !wanted) continue;  // background learned; skipped frames
     const sim::SimFrame frame = rig.render(f);
     std::vector<Eigen::Vector3d> rois;
-    std::vector<int> sides;
+    out.sides.clear();
     if (frame.truth.person_present) {
       if (frame.truth.left_hand_in_workspace)
-        rois.push_back(frame.truth.left_hand), sides.push_back(0);
+        rois.push_back(frame.truth.left_hand), out.sides.push_back(0);
       if (frame.truth.right_hand_in_workspace)
-        rois.push_back(frame.truth.right_hand), sides.push_back(1);
+        rois.push_back(frame.truth.right_hand), out.sides.push_back(1);
     }
     const psfs::FrameResult res = recon.process(frame.images, rig.rig().cameras, rois);
-    if (f < begin || res.status != psfs::FrameResult::Status::kReconstructed) continue;
-    for (size_t h = 0; h < rois.size(); ++h) {
+    if (!wanted || res.status != psfs::FrameResult::Status::kReconstructed) continue;
+    out.sim = &frame;
+    out.rig_frame = f;
+    out.result = &res;
+    visit(out);
+    ++out.index;
+  }
+}
+
+std::vector<SimHandVolume> recordSimHandVolumes(const SimHandVolumeOptions& o) {
+  std::vector<SimHandVolume> out;
+  visitSimHandFrames(o, [&](const SimHandFrame& f) {
+    const int empty = f.rig->options().empty_frames;
+    for (size_t h = 0; h < f.sides.size(); ++h) {
+      const psfs::ProbabilityVolume& vol = f.result->hands[h];
       SimHandVolume v;
-      v.frame = f - so.empty_frames;
-      v.side = sides[h];
-      v.time = frame.time;
-      v.origin = res.hands[h].grid.origin;
-      v.voxel_size = res.hands[h].grid.voxel_size;
-      v.dims = res.hands[h].grid.dims;
-      v.data = res.hands[h].data;
+      v.frame = f.rig_frame - empty;
+      v.side = f.sides[h];
+      v.time = f.sim->time;
+      v.origin = vol.grid.origin;
+      v.voxel_size = vol.grid.voxel_size;
+      v.dims = vol.grid.dims;
+      v.data = vol.data;
       out.push_back(std::move(v));
     }
-  }
+  });
   return out;
 }
 

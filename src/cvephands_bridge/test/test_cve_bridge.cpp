@@ -2,7 +2,8 @@
 // the bridge feeding it synthetic hand volumes from psfs/hand_volumes, and a viewer client that
 // decodes what the room relays. Checks: the bridge joins by itself (also when the server starts
 // after it), every hand arrives with its id and placement, the decoded volume meshes to the
-// same triangles as the original, and the diagnostics count what was sent.
+// same triangles as the original, the diagnostics count what was sent, and malformed volumes
+// are rejected and counted while the good hands keep flowing.
 #include <gtest/gtest.h>
 
 #include <map>
@@ -130,8 +131,22 @@ TEST(CveBridge, StreamsHandsIntoTheRoom) {
     std::lock_guard<std::mutex> l(m);
     return diag.count("hand messages sent") && std::stoi(diag["hand messages sent"]) >= 20;
   }, 5.0));
+  // Bad input: a volume shorter than its dims, and ids / volumes of different counts. Both are
+  // rejected and counted; the good hand of the first message still goes out.
+  auto bad = boost::make_shared<tabletop_msgs::HandVolumes>(*msg);
+  bad->header.stamp = ros::Time(101.0);
+  bad->volumes[1].data.resize(10);
+  pub.publish(bad);
+  auto mismatched = boost::make_shared<tabletop_msgs::HandVolumes>(*msg);
+  mismatched->target_ids = {3};
+  pub.publish(mismatched);
+  EXPECT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> l(m);
+    return diag["volumes rejected"] == "2" && count[3] >= 11;
+  }, 5.0)) << "rejected: " << diag["volumes rejected"];
   {
     std::lock_guard<std::mutex> l(m);
+    EXPECT_EQ(count[4], 10);
     std::printf("[bridge] diagnostics: %s messages sent, mean %s bytes, encode %s ms\n",
                 diag["hand messages sent"].c_str(), diag["message size, mean (bytes)"].c_str(),
                 diag["encode per hand (ms)"].c_str());

@@ -6,17 +6,22 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "psfs_reconstruction/reconstructor.h"
+#include "tabletop_capture/sim/simulated_rig.h"
 
 namespace cvephands {
 
 struct SimHandVolumeOptions {
   std::string script = "wave";  // simulated rig motion script (MotionScript::names())
   int first_frame = 0;          // script frames skipped after the background frames
-  int frames = 50;              // consecutive script frames recorded after those
+  int frames = 50;              // script frames after those (0 = to the end of the script)
+  int every = 1;                // of those, every n-th is reconstructed (the others skipped)
   int seed = 1;                 // sensor noise seed
   int cameras = 8;
   bool short_sleeves = false;  // forearm skin inside the cube too: more surface to send
@@ -35,9 +40,27 @@ struct SimHandVolume {
   std::vector<uint8_t> data;  // p = value / 255, x fastest then y then z
 };
 
-// Learns the background on the rig's empty frames, then records every hand in the workspace in
-// each requested frame (in frame order, left before right). Throws std::invalid_argument for bad
+// One reconstructed frame set: result.hands[i] is the sub-volume of hand sides[i] (0 left,
+// 1 right; left before right), centred on that hand's true centroid.
+struct SimHandFrame {
+  const tabletop_capture::sim::SimulatedRig* rig = nullptr;  // e.g. rig->person(rig_frame)
+  const tabletop_capture::sim::SimFrame* sim = nullptr;      // the rendered frame set
+  int rig_frame = 0;  // index in the rig's frames (the background frames included)
+  int index = 0;      // 0, 1, ... over the visited frames
+  int count = 0;      // frames that will be visited in all (for progress output)
+  const psfs::FrameResult* result = nullptr;
+  std::vector<int> sides;
+};
+
+// Learns the background on the rig's empty frames, then renders and reconstructs each requested
+// frame (first_frame, frames, every) and calls visit() with it. Shared by the recorder below and
+// the mesh accuracy evaluation (hand_mesh_evaluation.h). Throws std::invalid_argument for bad
 // options, std::runtime_error if the skin model cannot be read.
+void visitSimHandFrames(const SimHandVolumeOptions& options,
+                        const std::function<void(const SimHandFrame&)>& visit);
+
+// Records every hand in the workspace in each requested frame (in frame order, left before
+// right): visitSimHandFrames with the volumes copied out.
 std::vector<SimHandVolume> recordSimHandVolumes(const SimHandVolumeOptions& options);
 
 }  // namespace cvephands
