@@ -10,7 +10,6 @@
 #include <mutex>
 
 #include <boost/make_shared.hpp>
-#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
 
 #include <tabletop_msgs/HandVolumes.h>
@@ -45,15 +44,7 @@ TEST(CveBridge, StreamsHandsIntoTheRoom) {
   ros::param::set("/tabletop/cve_bridge/reconnect_interval", 0.2);
 
   std::mutex m;
-  std::map<std::string, std::string> diag;
-  boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)> on_diag =
-      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
-        std::lock_guard<std::mutex> l(m);
-        for (const auto& s : d->status)
-          if (s.name.find("cve bridge") != std::string::npos)
-            for (const auto& kv : s.values) diag[kv.key] = kv.value;
-      };
-  auto s1 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
+  tabletop_capture::test_support::DiagnosticsValues diag("cve bridge");
   ros::Publisher pub = nh.advertise<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 5);
   ASSERT_TRUE(loadNodelet("/tabletop/cve_bridge", "cvephands_bridge/CveBridge"));
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }, 10.0));
@@ -128,8 +119,7 @@ TEST(CveBridge, StreamsHandsIntoTheRoom) {
   }
   }
   EXPECT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> l(m);
-    return diag.count("hand messages sent") && std::stoi(diag["hand messages sent"]) >= 20;
+    return diag.has("hand messages sent") && std::stoi(diag.get("hand messages sent")) >= 20;
   }, 5.0));
   // Bad input: a volume shorter than its dims, and ids / volumes of different counts. Both are
   // rejected and counted; the good hand of the first message still goes out.
@@ -142,27 +132,19 @@ TEST(CveBridge, StreamsHandsIntoTheRoom) {
   pub.publish(mismatched);
   EXPECT_TRUE(waitFor([&] {
     std::lock_guard<std::mutex> l(m);
-    return diag["volumes rejected"] == "2" && count[3] >= 11;
-  }, 5.0)) << "rejected: " << diag["volumes rejected"];
+    return diag.get("volumes rejected") == "2" && count[3] >= 11;
+  }, 5.0)) << "rejected: " << diag.get("volumes rejected");
   {
     std::lock_guard<std::mutex> l(m);
     EXPECT_EQ(count[4], 10);
     std::printf("[bridge] diagnostics: %s messages sent, mean %s bytes, encode %s ms\n",
-                diag["hand messages sent"].c_str(), diag["message size, mean (bytes)"].c_str(),
-                diag["encode per hand (ms)"].c_str());
+                diag.get("hand messages sent").c_str(), diag.get("message size, mean (bytes)").c_str(),
+                diag.get("encode per hand (ms)").c_str());
   }
   viewer.close();
   server.stop();
 }
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_cve_bridge");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  loader().clear();
-  spinner.stop();
-  ros::shutdown();
-  return rc;
+  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_cve_bridge", 2);
 }

@@ -12,7 +12,6 @@
 
 #include <Eigen/Core>
 #include <boost/make_shared.hpp>
-#include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -43,7 +42,6 @@ TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
   std::mutex m;
   std::vector<tabletop_msgs::HandMeshes::ConstPtr> meshes;
   std::vector<visualization_msgs::MarkerArray::ConstPtr> markers;
-  std::map<std::string, std::string> diag;
   boost::function<void(const tabletop_msgs::HandMeshes::ConstPtr&)> on_meshes =
       [&](const tabletop_msgs::HandMeshes::ConstPtr& x) {
         std::lock_guard<std::mutex> l(m);
@@ -54,16 +52,9 @@ TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
         std::lock_guard<std::mutex> l(m);
         markers.push_back(x);
       };
-  boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)> on_diag =
-      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
-        std::lock_guard<std::mutex> l(m);
-        for (const auto& s : d->status)
-          if (s.name.find("hand meshing") != std::string::npos)
-            for (const auto& kv : s.values) diag[kv.key] = kv.value;
-      };
   auto s1 = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 10, on_meshes);
   auto s2 = nh.subscribe<visualization_msgs::MarkerArray>("/tabletop/cve/hand_meshes", 10, on_markers);
-  auto s3 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
+  tabletop_capture::test_support::DiagnosticsValues diag("hand meshing");
   ros::Publisher pub = nh.advertise<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 5);
   ASSERT_TRUE(loadNodelet("/tabletop/hand_mesher", "cvephands_bridge/HandMesher"));
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && s1.getNumPublishers() > 0 &&
@@ -153,21 +144,13 @@ TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
     ASSERT_EQ(meshes[2]->meshes.size(), 1u);
     EXPECT_EQ(meshes[2]->meshes[0].target_id, 3u);
   }
-  EXPECT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return diag["volumes rejected"] == "2"; }, 5.0));
+  EXPECT_TRUE(waitFor([&] { return diag.get("volumes rejected") == "2"; }, 5.0));
   std::lock_guard<std::mutex> l(m);
   std::printf("[mesher] diagnostics: %s ms per hand, %s triangles per hand\n",
-              diag["meshing per hand (ms)"].c_str(), diag["triangles per hand"].c_str());
-  EXPECT_EQ(diag["meshes"], "4");
+              diag.get("meshing per hand (ms)").c_str(), diag.get("triangles per hand").c_str());
+  EXPECT_EQ(diag.get("meshes"), "4");
 }
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_hand_mesher");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  loader().clear();
-  spinner.stop();
-  ros::shutdown();
-  return rc;
+  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_hand_mesher", 2);
 }

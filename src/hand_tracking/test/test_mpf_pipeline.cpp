@@ -8,7 +8,6 @@
 #include <map>
 #include <mutex>
 
-#include <diagnostic_msgs/DiagnosticArray.h>
 #include <nodelet/loader.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
@@ -51,7 +50,6 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked, truth;
   std::map<ros::Time, tabletop_msgs::HandVolumes::ConstPtr> hand_volumes;
   std::map<ros::Time, tabletop_msgs::HandMeshes::ConstPtr> hand_meshes;
-  std::map<std::string, std::string> diag;
   boost::function<void(const tabletop_msgs::TrackedTargets::ConstPtr&)> on_tracked =
       [&](const tabletop_msgs::TrackedTargets::ConstPtr& t) {
         std::lock_guard<std::mutex> l(m);
@@ -72,17 +70,10 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
         std::lock_guard<std::mutex> l(m);
         hand_meshes[h->header.stamp] = h;
       };
-  boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)> on_diag =
-      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
-        std::lock_guard<std::mutex> l(m);
-        for (const auto& s : d->status)
-          if (s.name.find("mpf hand tracking") != std::string::npos)
-            for (const auto& kv : s.values) diag[kv.key] = kv.value;
-      };
   auto s1 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/hands/targets", 300, on_tracked);
   auto s2 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 300, on_truth);
   auto s3 = nh.subscribe<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 300, on_hands);
-  auto s4 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
+  tabletop_capture::test_support::DiagnosticsValues diag("mpf hand tracking");
   auto s5 = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 300, on_meshes);
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
@@ -150,9 +141,9 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   EXPECT_GE(meshes_ok + 6, volumes_total);
   // tf of the head.
   EXPECT_TRUE(tf_buffer.canTransform("world", "head", ros::Time(0)));
-  ASSERT_TRUE(diag.count("volumes rejected"));
-  EXPECT_EQ(diag["volumes rejected"], "0");
-  std::printf("[mpf] diagnostics: mpf total %s ms\n", diag["mpf total (ms)"].c_str());
+  ASSERT_TRUE(diag.has("volumes rejected"));
+  EXPECT_EQ(diag.get("volumes rejected"), "0");
+  std::printf("[mpf] diagnostics: mpf total %s ms\n", diag.get("mpf total (ms)").c_str());
   lock.unlock();
 
   // A malformed pair of volumes (data shorter than the dims say) is rejected and counted.
@@ -166,17 +157,9 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   bad->data.resize(10);
   body_pub.publish(bad);
   skin_pub.publish(bad);
-  EXPECT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return diag["volumes rejected"] == "1"; }, 5.0));
+  EXPECT_TRUE(waitFor([&] { return diag.get("volumes rejected") == "1"; }, 5.0));
 }
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_mpf_pipeline");
-  ros::AsyncSpinner spinner(4);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  loader().clear();
-  spinner.stop();
-  ros::shutdown();
-  return rc;
+  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_mpf_pipeline", 4);
 }

@@ -13,7 +13,6 @@
 #include <mutex>
 #include <set>
 
-#include <diagnostic_msgs/DiagnosticArray.h>
 #include <nodelet/loader.h>
 #include <ros/ros.h>
 
@@ -55,7 +54,6 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   std::map<ros::Time, tabletop_msgs::VoxelVolume::ConstPtr> bodies, skins;
   std::map<ros::Time, tabletop_msgs::HandVolumes::ConstPtr> hands;
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> truths;
-  std::map<std::string, std::string> diag;
   boost::function<void(const tabletop_msgs::MultiViewFrame::ConstPtr&)> on_frame =
       [&](const tabletop_msgs::MultiViewFrame::ConstPtr& f) {
         std::lock_guard<std::mutex> l(m);
@@ -86,21 +84,12 @@ TEST(PsfsPipeline, SimRigToVolumes) {
         }
         roi_pub.publish(t);
       };
-  boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)> on_diag =
-      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
-        std::lock_guard<std::mutex> l(m);
-        for (const auto& s : d->status)
-          if (s.name.find("psfs reconstruction") != std::string::npos) {
-            for (const auto& kv : s.values) diag[kv.key] = kv.value;
-            diag["message"] = s.message;
-          }
-      };
   auto s1 = nh.subscribe<tabletop_msgs::MultiViewFrame>("/tabletop/frames", 200, on_frame);
   auto s2 = nh.subscribe<tabletop_msgs::VoxelVolume>("/tabletop/psfs/body_volume", 200, on_body);
   auto s3 = nh.subscribe<tabletop_msgs::VoxelVolume>("/tabletop/psfs/skin_volume", 200, on_skin);
   auto s4 = nh.subscribe<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 200, on_hands);
   auto s5 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 200, on_truth);
-  auto s6 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
+  tabletop_capture::test_support::DiagnosticsValues diag("psfs reconstruction");
 
   ASSERT_TRUE(loadNodelet("/tabletop/psfs", "psfs_reconstruction/Psfs"));
   ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
@@ -176,19 +165,19 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   EXPECT_GT(checked, 0u);
 
   // Diagnostics and the saved background.
-  ASSERT_TRUE(diag.count("frame sets reconstructed"));
-  EXPECT_GE(std::stoi(diag["frame sets reconstructed"]), expected - 3);
-  EXPECT_GT(std::stod(diag["body fusion (ms)"]), 0.0);
+  ASSERT_TRUE(diag.has("frame sets reconstructed"));
+  EXPECT_GE(std::stoi(diag.get("frame sets reconstructed")), expected - 3);
+  EXPECT_GT(std::stod(diag.get("body fusion (ms)")), 0.0);
   std::printf("[psfs] diagnostics: classify %s ms, body %s ms, skin %s ms, hands %s ms, total %s ms\n",
-              diag["classify (ms)"].c_str(), diag["body fusion (ms)"].c_str(),
-              diag["skin fusion (ms)"].c_str(), diag["hand volumes (ms)"].c_str(),
-              diag["total (ms)"].c_str());
+              diag.get("classify (ms)").c_str(), diag.get("body fusion (ms)").c_str(),
+              diag.get("skin fusion (ms)").c_str(), diag.get("hand volumes (ms)").c_str(),
+              diag.get("total (ms)").c_str());
   for (int c = 0; c < 8; ++c)
     EXPECT_TRUE(std::filesystem::exists(bg_dir + "/cam" + std::to_string(c) + ".bgm")) << c;
   std::filesystem::remove_all(bg_dir);
 
   // A bundle that breaks the contract (mono8 image) is rejected, counted, and survived.
-  ASSERT_EQ(diag["frame sets rejected"], "0");
+  ASSERT_EQ(diag.get("frame sets rejected"), "0");
   lock.unlock();
   ros::Publisher bad = nh.advertise<tabletop_msgs::MultiViewFrame>("/tabletop/frames", 1);
   auto f = boost::make_shared<tabletop_msgs::MultiViewFrame>();
@@ -200,19 +189,11 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   f->camera_poses.resize(1);
   waitFor([&] { return bad.getNumSubscribers() > 0; }, 5.0);
   bad.publish(f);
-  EXPECT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return diag["frame sets rejected"] == "1"; }, 5.0));
+  EXPECT_TRUE(waitFor([&] { return diag.get("frame sets rejected") == "1"; }, 5.0));
   std::lock_guard<std::mutex> l2(m);
-  EXPECT_NE(diag["message"].find("encoding 'mono8'"), std::string::npos) << diag["message"];
+  EXPECT_NE(diag.message().find("encoding 'mono8'"), std::string::npos) << diag.message();
 }
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_psfs_pipeline");
-  ros::AsyncSpinner spinner(4);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  loader().clear();
-  spinner.stop();
-  ros::shutdown();
-  return rc;
+  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_psfs_pipeline", 4);
 }

@@ -397,13 +397,5 @@ TEST_F(PipelineTest, RigPublisherPublishesCameraInfoAndTf) {
 }
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_pipeline");
-  ros::AsyncSpinner spinner(4);
-  spinner.start();
-  const int rc = RUN_ALL_TESTS();
-  PipelineTest::unloadAll();
-  spinner.stop();
-  ros::shutdown();
-  return rc;
+  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_pipeline", 4, [] { PipelineTest::unloadAll(); });
 }

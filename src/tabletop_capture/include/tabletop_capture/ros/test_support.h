@@ -3,7 +3,12 @@
 #pragma once
 
 #include <functional>
+#include <map>
+#include <mutex>
+#include <string>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <gtest/gtest.h>
 #include <nodelet/loader.h>
 #include <ros/ros.h>
 
@@ -29,6 +34,60 @@ inline nodelet::Loader& loader() {
 // Loads a nodelet into loader() with no remappings or arguments.
 inline bool loadNodelet(const std::string& name, const std::string& type) {
   return loader().load(name, type, nodelet::M_string(), nodelet::V_string());
+}
+
+// The latest key/value pairs (and summary message) of the /diagnostics status whose name
+// contains `status_name`, kept up to date by its own subscription. Thread-safe.
+class DiagnosticsValues {
+ public:
+  explicit DiagnosticsValues(const std::string& status_name) : name_(status_name) {
+    ros::NodeHandle nh;
+    sub_ = nh.subscribe("/diagnostics", 50, &DiagnosticsValues::onDiagnostics, this);
+  }
+  bool has(const std::string& key) const {
+    std::lock_guard<std::mutex> l(m_);
+    return values_.count(key) > 0;
+  }
+  std::string get(const std::string& key) const {  // "" until reported
+    std::lock_guard<std::mutex> l(m_);
+    auto it = values_.find(key);
+    return it == values_.end() ? std::string() : it->second;
+  }
+  std::string message() const {
+    std::lock_guard<std::mutex> l(m_);
+    return message_;
+  }
+
+ private:
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& d) {
+    std::lock_guard<std::mutex> l(m_);
+    for (const auto& s : d->status) {
+      if (s.name.find(name_) == std::string::npos) continue;
+      for (const auto& kv : s.values) values_[kv.key] = kv.value;
+      message_ = s.message;
+    }
+  }
+  const std::string name_;
+  mutable std::mutex m_;
+  std::map<std::string, std::string> values_;
+  std::string message_;
+  ros::Subscriber sub_;
+};
+
+// main() of an in-process nodelet test: gtest and ROS set up, callbacks served by an
+// AsyncSpinner of `threads`, and `unload` (default: loader().clear()) run before ros::shutdown()
+// so the nodelets go before ROS does (avoids the ROS 1 teardown race).
+inline int runNodeletTests(int argc, char** argv, const char* node_name, int threads,
+                           const std::function<void()>& unload = [] { loader().clear(); }) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, node_name);
+  ros::AsyncSpinner spinner(threads);
+  spinner.start();
+  const int rc = RUN_ALL_TESTS();
+  unload();
+  spinner.stop();
+  ros::shutdown();
+  return rc;
 }
 
 }  // namespace test_support
