@@ -8,7 +8,8 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 usage() {
   cat <<'USAGE'
 Usage: scripts/demo.sh [options] [extra roslaunch arg:=value ...]
-  --frames N        frame sets to render, the empty background frames included (default 300)
+  --frames N        frame sets to render, the empty background frames included (default 300;
+                    0 = until Ctrl-C, e.g. to watch the room in a browser)
   --out DIR         output folder (default ./output)
   --cameras N       simulated cameras (default 8)
   --script NAME     motion script: all, wave, point, fold_hands, reach_targets, leave_reenter,
@@ -16,6 +17,9 @@ Usage: scripts/demo.sh [options] [extra roslaunch arg:=value ...]
   --seed N          seed of the sensor noise (default 1)
   --bayer ENC       publish Bayer images (e.g. bayer_rggb8) instead of rgb8
   --short-sleeves   bare forearms
+  --participants N  1, or 2: a second simulated rig (script point, seed 2) joins the CVE room
+  --port N          port of the CVE room server and its browser client (default 8765)
+  --no-cve          no room server, no streaming of the hands
   --rviz            also open rviz (under Xvfb with a screenshot in the output folder when
                     there is no $DISPLAY)
   --no-mesh-eval    skip the hand-mesh accuracy run after the pipeline (mesh_eval)
@@ -28,6 +32,8 @@ FRAMES=300
 OUT="$PWD/output"
 RVIZ=false
 MESH_EVAL=true
+CVE=true
+PORT=8765
 EXTRA=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -38,6 +44,9 @@ while [ $# -gt 0 ]; do
     --seed) EXTRA+=("seed:=$2"); shift 2 ;;
     --bayer) EXTRA+=("bayer:=$2"); shift 2 ;;
     --short-sleeves) EXTRA+=("short_sleeves:=true"); shift ;;
+    --participants) EXTRA+=("participants:=$2"); shift 2 ;;
+    --port) PORT="$2"; shift 2 ;;
+    --no-cve) CVE=false; shift ;;
     --rviz) RVIZ=true; shift ;;
     --no-mesh-eval) MESH_EVAL=false; shift ;;
     -h|--help) usage; exit 0 ;;
@@ -70,11 +79,16 @@ if [ "$RVIZ" = true ] && [ -z "${DISPLAY:-}" ]; then
 fi
 
 echo "[demo] simulated rig -> synchroniser on ROS master $ROS_MASTER_URI; output in $OUT"
+if [ "$CVE" = true ]; then
+  echo "[demo] CVE room: open http://127.0.0.1:$PORT/ in a browser to see the hands around the" \
+    "virtual table (--frames 0 keeps it running until Ctrl-C)"
+fi
 set +e
 LIVE=false
 [ -t 1 ] && LIVE=true
 roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" monitor:=true frames:="$FRAMES" \
-  output_dir:="$OUT" rviz:="$RVIZ" live_status:="$LIVE" "${EXTRA[@]}" 2>&1 |
+  output_dir:="$OUT" rviz:="$RVIZ" live_status:="$LIVE" cve:="$CVE" cve_port:="$PORT" \
+  "${EXTRA[@]}" 2>&1 |
   sed -u 's/\x1b\[[0-9;]*m//g; s/\x1b\]2;[^\x07]*\x07//g' |
   grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()|REQUIRED process|process has finished cleanly|^log file:|Initiating shutdown|killing on exit|shutting down processing monitor|^.{0,8}done.{0,8}$|Loading nodelet|waitForService|Unloading nodelet|Initializing nodelet|Press Ctrl-C|^\.\.\. logging|^.\]2;'
 rc=${PIPESTATUS[0]}

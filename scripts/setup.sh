@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Sets up a fresh Debian 12 machine for tabletop hands and builds the workspace.
 #  - installs the Debian packages below if any is missing (needs root; apt only, no rosdep);
-#  - builds the catkin workspace (this repository) in Release with Debian's python3.
+#  - builds the catkin workspace (this repository) in Release with Debian's python3;
+#  - builds the browser client of the CVE room (src/cvephands_bridge/web -> web/dist) from the
+#    npm registry's packages pinned in its package-lock.json (three.js, fzstd, esbuild,
+#    playwright-core for the browser test, which drives Debian's chromium).
 # Idempotent: with everything installed and nothing changed it takes a few seconds.
 # Usage: scripts/setup.sh [--bench] [extra catkin_make args]
 #   --bench  also install the peer libraries of the benchmarks (Open3D, for bench_carving)
@@ -22,7 +25,11 @@ PACKAGES=(
   libpcl-dev libpcl-conversions-dev libopencv-dev libeigen3-dev libyaml-cpp-dev
   libgtest-dev libbenchmark-dev libzstd-dev libboost-dev
   rviz xvfb x11-apps imagemagick libgl1-mesa-dri
+  chromium
 )
+# Node.js and npm build the browser client; a machine that already has them (e.g. from
+# NodeSource) keeps its own, Debian's are installed otherwise.
+command -v npm >/dev/null 2>&1 || PACKAGES+=(nodejs npm)
 
 missing=()
 for p in "${PACKAGES[@]}" "${BENCH_PACKAGES[@]}"; do
@@ -49,4 +56,15 @@ catkin_make -j2 -DCMAKE_BUILD_TYPE=Release \
 rc=${PIPESTATUS[0]}
 set -e
 if [ "$rc" -ne 0 ]; then echo "[setup] build FAILED (catkin_make exit $rc)"; exit "$rc"; fi
+
+WEB="$ROOT/src/cvephands_bridge/web"
+if [ ! -f "$WEB/node_modules/.package-lock.json" ] ||
+   [ "$WEB/package-lock.json" -nt "$WEB/node_modules/.package-lock.json" ]; then
+  echo "[setup] installing the browser client's npm packages (npm ci)"
+  (cd "$WEB" && npm ci --no-audit --no-fund --loglevel=error)
+fi
+if [ ! -f "$WEB/dist/app.js" ] || [ -n "$(find "$WEB/src" "$WEB/index.html" "$WEB/style.css" \
+     "$WEB/build.mjs" "$WEB/package-lock.json" -newer "$WEB/dist/app.js" 2>/dev/null | head -n 1)" ]; then
+  (cd "$WEB" && node build.mjs)
+fi
 echo "[setup] ok"

@@ -4,12 +4,14 @@
 //   room_server [--bind ADDR] [--port N] [--token T] [--static DIR] [--seats N] [--status S]
 //
 // Prints a status line every --status seconds (rooms, participants, messages, drops) and stops
-// cleanly on SIGINT / SIGTERM.
+// cleanly on SIGINT / SIGTERM. Arguments starting with "__" (what roslaunch appends: __name:=,
+// __log:=) are ignored, so launch files can start it as a node.
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <thread>
 
@@ -40,6 +42,7 @@ int main(int argc, char** argv) {
   double status = 5.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a.rfind("__", 0) == 0) continue;
     auto next = [&]() -> std::string {
       if (i + 1 >= argc) {
         usage();
@@ -64,6 +67,14 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
+  if (!o.static_root.empty() && !std::filesystem::is_directory(o.static_root)) {
+    // Relaying hands needs no client files: keep serving the rigs, say what is missing.
+    std::fprintf(stderr,
+                 "[room_server] WARNING: no browser client at %s (build it with scripts/setup.sh); "
+                 "relaying hands only\n",
+                 o.static_root.c_str());
+    o.static_root.clear();
+  }
   cvephands::RoomServer server(o);
   try {
     server.start();
@@ -74,6 +85,9 @@ int main(int argc, char** argv) {
   std::printf("[room_server] listening on %s:%u (WebSocket path /ws)%s%s\n", o.bind_address.c_str(),
               server.port(), o.static_root.empty() ? "" : ", client from ",
               o.static_root.c_str());
+  if (!o.static_root.empty())
+    std::printf("[room_server] open http://%s:%u/ in a browser to enter the room\n",
+                o.bind_address == "0.0.0.0" ? "127.0.0.1" : o.bind_address.c_str(), server.port());
   std::fflush(stdout);
   auto last = std::chrono::steady_clock::now();
   while (!g_stop) {

@@ -98,6 +98,7 @@ class MpfNodelet : public nodelet::Nodelet {
     pnh.param("seed", seed, seed);
     pnh.param("publish_particles", publish_particles_, false);
     pnh.param("world_frame", world_frame_, std::string("world"));
+    pnh.param("tf_prefix", tf_prefix_, std::string());
     try {
       tracker_ = std::make_unique<MpfTracker>(loadParams(pnh), static_cast<uint64_t>(seed));
     } catch (const std::exception& e) {
@@ -195,7 +196,8 @@ class MpfNodelet : public nodelet::Nodelet {
       m.weight = t.weight;
       m.active = t.active;
       msg->targets.push_back(m);
-      const std::string frame = t.type == Target::kHead ? "head" : "hand_" + std::to_string(t.id);
+      const std::string frame =
+          tf_prefix_ + (t.type == Target::kHead ? "head" : "hand_" + std::to_string(t.id));
       visualization_msgs::Marker box;
       box.header = msg->header;
       box.ns = "targets";
@@ -291,7 +293,7 @@ class MpfNodelet : public nodelet::Nodelet {
   }
 
   std::unique_ptr<MpfTracker> tracker_;
-  std::string fatal_, world_frame_;
+  std::string fatal_, world_frame_, tf_prefix_;
   bool publish_particles_ = false;
   ros::Subscriber skin_sub_, body_sub_;
   ros::Publisher targets_pub_, markers_pub_;
