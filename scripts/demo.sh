@@ -17,9 +17,12 @@ Usage: scripts/demo.sh [options] [extra roslaunch arg:=value ...]
   --seed N          seed of the sensor noise (default 1)
   --bayer ENC       publish Bayer images (e.g. bayer_rggb8) instead of rgb8
   --short-sleeves   bare forearms
-  --participants N  1, or 2: a second simulated rig (script point, seed 2) joins the CVE room
+  --participants N  1, or 2: a second simulated rig (script reach_targets, seed 2) joins the CVE room
   --port N          port of the CVE room server and its browser client (default 8765)
   --no-cve          no room server, no streaming of the hands
+  --browser         also open the room in headless Chromium while the pipeline runs: writes
+                    cve_room.png and adds its render rate and capture->render latency to the
+                    summary (costs the pipeline CPU time: software WebGL)
   --rviz            also open rviz (under Xvfb with a screenshot in the output folder when
                     there is no $DISPLAY)
   --no-mesh-eval    skip the hand-mesh accuracy run after the pipeline (mesh_eval)
@@ -33,6 +36,8 @@ OUT="$PWD/output"
 RVIZ=false
 MESH_EVAL=true
 CVE=true
+BROWSER=false
+PARTICIPANTS=1
 PORT=8765
 EXTRA=()
 while [ $# -gt 0 ]; do
@@ -44,7 +49,8 @@ while [ $# -gt 0 ]; do
     --seed) EXTRA+=("seed:=$2"); shift 2 ;;
     --bayer) EXTRA+=("bayer:=$2"); shift 2 ;;
     --short-sleeves) EXTRA+=("short_sleeves:=true"); shift ;;
-    --participants) EXTRA+=("participants:=$2"); shift 2 ;;
+    --participants) PARTICIPANTS="$2"; EXTRA+=("participants:=$2"); shift 2 ;;
+    --browser) BROWSER=true; shift ;;
     --port) PORT="$2"; shift 2 ;;
     --no-cve) CVE=false; shift ;;
     --rviz) RVIZ=true; shift ;;
@@ -61,12 +67,18 @@ bash "$ROOT/scripts/setup.sh"
 # shellcheck source=ros_env.sh
 source "$ROOT/scripts/ros_env.sh"
 export ROS_LOG_DIR="$OUT/ros_log"
+# Nodelet log lines as they happen, not in one block when the manager exits.
+export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
 
 XVFB_PID=""
+BROWSER_PID=""
+WATCH_PID=""
 SHOT_PID=""
 cleanup() {
   [ -n "$SHOT_PID" ] && kill "$SHOT_PID" 2>/dev/null || true
   [ -n "$XVFB_PID" ] && kill "$XVFB_PID" 2>/dev/null || true
+  [ -n "$BROWSER_PID" ] && kill "$BROWSER_PID" 2>/dev/null || true
+  [ -n "$WATCH_PID" ] && kill "$WATCH_PID" 2>/dev/null || true
 }
 trap cleanup EXIT
 if [ "$RVIZ" = true ] && [ -z "${DISPLAY:-}" ]; then
@@ -83,6 +95,26 @@ if [ "$CVE" = true ]; then
   echo "[demo] CVE room: open http://127.0.0.1:$PORT/ in a browser to see the hands around the" \
     "virtual table (--frames 0 keeps it running until Ctrl-C)"
 fi
+WEB="$ROOT/src/cvephands_bridge/web"
+if [ "$CVE" = true ]; then
+  # A viewer in the room: what the bridges stream (rate, kbit/s, capture -> viewer latency).
+  "$ROOT/devel/lib/cvephands_bridge/room_watch" --port "$PORT" --wait 20 --interval 0 --decode \
+    >"$OUT/room_watch.txt" 2>&1 &
+  WATCH_PID=$!
+fi
+if [ "$BROWSER" = true ]; then
+  if [ "$CVE" != true ] || [ ! -x /usr/bin/chromium ] || [ ! -f "$WEB/dist/app.js" ]; then
+    echo "[demo] --browser needs the CVE (no --no-cve), /usr/bin/chromium and the built client" >&2
+    BROWSER=false
+  else
+    echo "[demo] headless Chromium joins the room (screenshot: $OUT/cve_room.png)"
+    rm -f "$OUT/cve_room.png" "$OUT/browser.json"
+    ( cd "$WEB" && exec node test/e2e_browser.mjs --url "http://127.0.0.1:$PORT/?aa=0" \
+        --participants "$PARTICIPANTS" --hands 2 --timeout 60 --measure 4 --out "$OUT" \
+        --min-fps 0 --max-latency 1e9 >"$OUT/browser.json" 2>"$OUT/browser.log" ) &
+    BROWSER_PID=$!
+  fi
+fi
 set +e
 LIVE=false
 [ -t 1 ] && LIVE=true
@@ -92,6 +124,39 @@ roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" monitor:=true frames:="$FRAM
   sed -u 's/\x1b\[[0-9;]*m//g; s/\x1b\]2;[^\x07]*\x07//g' |
   grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()|REQUIRED process|process has finished cleanly|^log file:|Initiating shutdown|killing on exit|shutting down processing monitor|^.{0,8}done.{0,8}$|Loading nodelet|waitForService|Unloading nodelet|Initializing nodelet|Press Ctrl-C|^\.\.\. logging|^.\]2;'
 rc=${PIPESTATUS[0]}
+if [ -n "$WATCH_PID" ]; then
+  kill -INT "$WATCH_PID" 2>/dev/null
+  wait "$WATCH_PID" 2>/dev/null
+  WATCH_PID=""
+  grep '^CVE room' "$OUT/room_watch.txt" | tee -a "$OUT/summary.txt"
+fi
+if [ -n "$BROWSER_PID" ]; then
+  wait "$BROWSER_PID" 2>/dev/null
+  BROWSER_PID=""
+  [ -f "$OUT/browser_room.png" ] && mv "$OUT/browser_room.png" "$OUT/cve_room.png"
+  /usr/bin/python3 - "$OUT/browser.json" <<'PY' | tee -a "$OUT/summary.txt"
+import json, sys
+try:
+    r = json.loads(open(sys.argv[1]).read().strip().splitlines()[-1])
+except Exception as e:
+    print('browser (headless Chromium): no result (%s); see browser.log' % e)
+    sys.exit(0)
+s = r.get('stats') or {}
+lat = s.get('latencyMs') or {}
+c2s = (s.get('captureToServerMs') or {}).get('median', float('nan'))
+rigs = [p for p in s.get('participants', []) if p.get('role') == 'rig']
+print('browser (headless Chromium, software WebGL 960x540): %d participant(s) with %s hands; '
+      'render %.1f fps' % (len(rigs), '+'.join(str(p.get('hands', 0)) for p in rigs),
+                           s.get('renderFps', float('nan'))))
+print('  capture -> browser render latency median %.0f ms, p95 %.0f ms (capture -> room server '
+      '%.0f ms); decode %.1f + mesh %.1f ms per hand in the page' % (
+          lat.get('median', float('nan')), lat.get('p95', float('nan')), c2s,
+          (s.get('decodeMs') or {}).get('mean', float('nan')),
+          (s.get('meshMs') or {}).get('mean', float('nan'))))
+if r.get('failures'):
+    print('  browser check: ' + '; '.join(r['failures']))
+PY
+fi
 if [ "$rc" -eq 0 ] && [ "$MESH_EVAL" = true ]; then
   # Hand-mesh accuracy against the simulated truth and a picture of both hands' meshes: the
   # same reconstruction and meshing code as the pipeline, on 4 s of reach_targets.

@@ -56,7 +56,16 @@ try {
   const page = await browser.newPage({ viewport: { width: 960, height: 540 } });
   page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
   page.on('pageerror', (e) => consoleErrors.push(String(e)));
-  await page.goto(args.url, { waitUntil: 'load', timeout: 20000 });
+  // The room server may still be starting (a launch file starts everything at once).
+  for (let attempt = 0; ; ++attempt) {
+    try {
+      await page.goto(args.url, { waitUntil: 'load', timeout: 20000 });
+      break;
+    } catch (e) {
+      if (attempt >= 40) throw e;
+      await sleep(500);
+    }
+  }
   log(`page loaded from ${args.url}, waiting for ${args.participants} participants with ` +
     `${args.hands} hands each (timeout ${args.timeout} s)`);
 
@@ -161,12 +170,12 @@ try {
     result.hands = skin.perBox;
     result.outsideSkinFraction = skin.outsideSkinFraction;
     for (const b of skin.perBox) {
-      // A hand fills roughly half of its screen box; 15 % leaves room for the box's corners,
-      // dark shading and antialiasing.
+      // A hand fills 15-50 % of its screen box (a pointing hand least); a hand that is not drawn
+      // leaves < 1 % (measured: 0.7 % when the status panel covered it). 5 % separates the two.
       if (b.hiddenPixels > b.pixels) {
         result.failures.push(`participant ${b.participant} hand ${b.target}: mostly under the ` +
           'status panel (the default view should frame the hands)');
-      } else if (b.skinFraction < 0.15) {
+      } else if (b.skinFraction < 0.05) {
         result.failures.push(`participant ${b.participant} hand ${b.target}: only ` +
           `${(100 * b.skinFraction).toFixed(1)} % skin pixels in its box`);
       }
