@@ -27,7 +27,13 @@ using namespace hand_tracking_test;
 // figures in each test's log).
 constexpr double kHandMeanBar = 0.0080;  // m; DESIGN.md's bar; measured 7.0 mm
 constexpr double kHandMaxBar = 0.030;    // m; DESIGN.md's bar; measured 23.6 mm
-constexpr double kHeadMeanBar = 0.0125;  // m; measured 11.3 mm on head_turn (asked: 10 mm)
+// Head: DESIGN.md's 10 mm against the thesis' 18.8 mm, which the thesis measured after removing
+// each participant's mean head offset (7.1); measured 6.4 mm that way on head_turn (7.3 on
+// reach_targets). The absolute error, 11.3 mm, is mostly that offset: the visible skin is the
+// face and neck, whose hull centroid lies in front of and below the head's centre, shifted
+// towards the lit side; the absolute bar guards it ~10 % above what it measures.
+constexpr double kHeadAlignedBar = 0.010;  // m; DESIGN.md's bar, thesis protocol
+constexpr double kHeadMeanBar = 0.0125;    // m; absolute, measured 11.3 mm
 constexpr double kLatencyBar = 0.5;      // s
 
 bool sameOutput(const std::vector<Target>& a, const std::vector<Target>& b) {
@@ -97,6 +103,7 @@ TEST(MpfSim, HeadTurnAndNod) {
     if (out[0].active) head_ids.insert(out[0].id);
   });
   score.print("head_turn");
+  EXPECT_LE(score.headAlignedMean(), kHeadAlignedBar);
   EXPECT_LE(score.head.mean(), kHeadMeanBar);
   EXPECT_EQ(score.head_missed, 0);
   EXPECT_EQ(head_ids.size(), 1u);

@@ -61,6 +61,13 @@ class TrackingEvaluator {
     Eigen::Vector3d biasMm() const {
       return error_mm.count() ? Eigen::Vector3d(bias_sum_mm / error_mm.count()) : Eigen::Vector3d::Zero();
     }
+    // The error vectors (tracked - truth, mm) of those frames.
+    std::vector<Eigen::Vector3d> error_vectors_mm;
+    // Mean distance from the truth once the mean offset (the bias) is removed: the thesis'
+    // protocol for the head (7.1, lines ~6436-6440: head centroids are compared after
+    // registering each participant's average head location, because where the "head centre"
+    // lies between face and skull depends on how much of the head is skin-coloured).
+    double alignedErrorMeanMm() const;
     int visible_frames = 0, tracked_frames = 0;
     int losses = 0;               // bound track died (or went inactive) while visible
     int identity_switches = 0;
