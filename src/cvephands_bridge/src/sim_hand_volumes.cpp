@@ -1,5 +1,6 @@
 #include "cvephands_bridge/sim_hand_volumes.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "psfs_reconstruction/gaussian_mixture.h"
@@ -68,6 +69,18 @@ std::vector<SimHandVolume> recordSimHandVolumes(const SimHandVolumeOptions& o) {
     }
   });
   return out;
+}
+
+HandFrame toHandFrame(SimHandVolume&& v) {
+  HandFrame f;
+  f.target_id = uint32_t(v.side);
+  f.stamp_sec = uint32_t(v.time);
+  f.stamp_nsec = uint32_t(std::lround((v.time - std::floor(v.time)) * 1e9)) % 1000000000u;
+  f.origin = v.origin;
+  f.voxel_size = v.voxel_size;
+  f.dims = v.dims;
+  f.data = std::move(v.data);
+  return f;
 }
 
 }  // namespace cvephands

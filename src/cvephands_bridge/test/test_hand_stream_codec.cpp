@@ -138,17 +138,8 @@ TEST(HandStreamCodec, SimulatedRigHandsRoundTrip) {
   so.frames = 50;
   so.skin_model = CVEPHANDS_SKIN_MODEL;
   std::vector<HandFrame> frames;
-  for (cvephands::SimHandVolume& v : cvephands::recordSimHandVolumes(so)) {
-    HandFrame f;
-    f.target_id = uint32_t(v.side);
-    f.stamp_sec = uint32_t(v.time);
-    f.stamp_nsec = uint32_t(std::lround((v.time - std::floor(v.time)) * 1e9)) % 1000000000u;
-    f.origin = v.origin;
-    f.voxel_size = v.voxel_size;
-    f.dims = v.dims;
-    f.data = std::move(v.data);
-    frames.push_back(std::move(f));
-  }
+  for (cvephands::SimHandVolume& v : cvephands::recordSimHandVolumes(so))
+    frames.push_back(cvephands::toHandFrame(std::move(v)));
   ASSERT_GE(frames.size(), 80u);  // both hands in the workspace in (nearly) every frame
   const StreamResult r = roundTrip(frames, HandStreamEncoderOptions(), 5);
   report("simulated rig, wave, 50 frames", r);

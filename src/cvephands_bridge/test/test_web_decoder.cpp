@@ -43,17 +43,8 @@ std::vector<HandFrame> simulatedHands(int frames) {
   so.frames = frames;
   so.skin_model = CVEPHANDS_SKIN_MODEL;
   std::vector<HandFrame> out;
-  for (cvephands::SimHandVolume& v : cvephands::recordSimHandVolumes(so)) {
-    HandFrame f;
-    f.target_id = uint32_t(v.side);
-    f.stamp_sec = uint32_t(v.time);
-    f.stamp_nsec = uint32_t(std::lround((v.time - std::floor(v.time)) * 1e9)) % 1000000000u;
-    f.origin = v.origin;
-    f.voxel_size = v.voxel_size;
-    f.dims = v.dims;
-    f.data = std::move(v.data);
-    out.push_back(std::move(f));
-  }
+  for (cvephands::SimHandVolume& v : cvephands::recordSimHandVolumes(so))
+    out.push_back(cvephands::toHandFrame(std::move(v)));
   return out;
 }
 

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "cvephands_bridge/hand_stream_codec.h"
 #include "psfs_reconstruction/reconstructor.h"
 #include "tabletop_capture/sim/simulated_rig.h"
 
@@ -62,5 +63,9 @@ void visitSimHandFrames(const SimHandVolumeOptions& options,
 // Records every hand in the workspace in each requested frame (in frame order, left before
 // right): visitSimHandFrames with the volumes copied out.
 std::vector<SimHandVolume> recordSimHandVolumes(const SimHandVolumeOptions& options);
+
+// The volume as one frame of a hand stream (target id = side, stamp = simulated time), moving
+// the voxels out of `v`.
+HandFrame toHandFrame(SimHandVolume&& v);
 
 }  // namespace cvephands

@@ -15,6 +15,7 @@
 
 #include "cvephands_bridge/hand_mesh_evaluation.h"
 #include "cvephands_bridge/mesh_render.h"
+#include "tabletop_capture/cli_args.h"
 
 namespace {
 
@@ -62,29 +63,20 @@ cv::Mat picture(const cvephands::HandMeshEvalResult& r) {
 int main(int argc, char** argv) {
   cvephands::HandMeshEvalOptions o;
   std::string out = "output";
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        usage();
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--script") o.script = next();
-    else if (a == "--frames") o.frames = std::atoi(next().c_str());
-    else if (a == "--every") o.every = std::atoi(next().c_str());
-    else if (a == "--seed") o.seed = std::atoi(next().c_str());
-    else if (a == "--iso") o.iso = std::atof(next().c_str());
-    else if (a == "--min-component") o.min_component_triangles = std::atoi(next().c_str());
-    else if (a == "--out") out = next();
-    else if (a == "-h" || a == "--help") {
+  tabletop_capture::CliArgs args("mesh_eval", argc, argv, usage);
+  while (args.next()) {
+    if (args.is("--script")) o.script = args.text();
+    else if (args.is("--frames")) o.frames = static_cast<int>(args.integer(0));
+    else if (args.is("--every")) o.every = static_cast<int>(args.integer(1));
+    else if (args.is("--seed")) o.seed = static_cast<int>(args.integer(0));
+    else if (args.is("--iso")) o.iso = args.number(0.0, 1.0);
+    else if (args.is("--min-component")) o.min_component_triangles = static_cast<int>(args.integer(0));
+    else if (args.is("--out")) out = args.text();
+    else if (args.help()) {
       usage();
       return 0;
     } else {
-      std::fprintf(stderr, "mesh_eval: unknown argument '%s'\n", a.c_str());
-      usage();
-      return 2;
+      args.unknown();
     }
   }
   const std::string pkg = ros::package::getPath("psfs_reconstruction");

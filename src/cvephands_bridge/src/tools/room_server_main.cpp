@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "cvephands_bridge/room_server.h"
+#include "tabletop_capture/cli_args.h"
 
 namespace {
 
@@ -40,29 +41,19 @@ int main(int argc, char** argv) {
   cvephands::RoomServerOptions o;
   o.port = 8765;
   double status = 5.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a.rfind("__", 0) == 0) continue;
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        usage();
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--bind") o.bind_address = next();
-    else if (a == "--port") o.port = static_cast<uint16_t>(std::atoi(next().c_str()));
-    else if (a == "--token") o.token = next();
-    else if (a == "--static") o.static_root = next();
-    else if (a == "--seats") o.seats.seats = std::atoi(next().c_str());
-    else if (a == "--status") status = std::atof(next().c_str());
-    else if (a == "-h" || a == "--help") {
+  tabletop_capture::CliArgs args("room_server", argc, argv, usage, /*skip_ros_args=*/true);
+  while (args.next()) {
+    if (args.is("--bind")) o.bind_address = args.text();
+    else if (args.is("--port")) o.port = static_cast<uint16_t>(args.integer(0, 65535));
+    else if (args.is("--token")) o.token = args.text();
+    else if (args.is("--static")) o.static_root = args.text();
+    else if (args.is("--seats")) o.seats.seats = static_cast<int>(args.integer(1, 1024));
+    else if (args.is("--status")) status = args.number(0.0);
+    else if (args.help()) {
       usage();
       return 0;
     } else {
-      std::fprintf(stderr, "room_server: unknown argument '%s'\n", a.c_str());
-      usage();
-      return 2;
+      args.unknown();
     }
   }
   std::signal(SIGINT, onSignal);

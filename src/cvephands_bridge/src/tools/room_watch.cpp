@@ -26,6 +26,7 @@
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/room_client.h"
+#include "tabletop_capture/cli_args.h"
 
 namespace {
 
@@ -78,30 +79,21 @@ int main(int argc, char** argv) {
   o.join.role = cvephands::room::Role::kViewer;
   double seconds = 0.0, interval = 5.0, wait = 0.0;
   bool decode = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        usage();
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--host") o.host = next();
-    else if (a == "--port") o.port = static_cast<uint16_t>(std::atoi(next().c_str()));
-    else if (a == "--room") o.join.room = next();
-    else if (a == "--token") o.join.token = next();
-    else if (a == "--seconds") seconds = std::atof(next().c_str());
-    else if (a == "--interval") interval = std::atof(next().c_str());
-    else if (a == "--wait") wait = std::atof(next().c_str());
-    else if (a == "--decode") decode = true;
-    else if (a == "-h" || a == "--help") {
+  tabletop_capture::CliArgs args("room_watch", argc, argv, usage);
+  while (args.next()) {
+    if (args.is("--host")) o.host = args.text();
+    else if (args.is("--port")) o.port = static_cast<uint16_t>(args.integer(1, 65535));
+    else if (args.is("--room")) o.join.room = args.text();
+    else if (args.is("--token")) o.join.token = args.text();
+    else if (args.is("--seconds")) seconds = args.number(0.0);
+    else if (args.is("--interval")) interval = args.number(0.0);
+    else if (args.is("--wait")) wait = args.number(0.0);
+    else if (args.is("--decode")) decode = true;
+    else if (args.help()) {
       usage();
       return 0;
     } else {
-      std::fprintf(stderr, "room_watch: unknown argument '%s'\n", a.c_str());
-      usage();
-      return 2;
+      args.unknown();
     }
   }
 

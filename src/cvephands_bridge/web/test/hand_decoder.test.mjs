@@ -6,6 +6,7 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import { HandStreamDecoder, crc32, readVarint, xxh64Low32 } from '../src/hand_decoder.js';
+import { random } from './random.mjs';
 
 const ISO = 153;
 const F = {
@@ -15,17 +16,6 @@ const F = {
 };
 
 // ---- a reference encoder, from the format's description ------------------------------------
-
-// mulberry32: deterministic noise without a seedable RNG package.
-function random(seed) {
-  let s = seed >>> 0;
-  return () => {
-    s = (s + 0x6d2b79f5) >>> 0;
-    let t = Math.imul(s ^ (s >>> 15), 1 | s);
-    t = (t + Math.imul(t ^ (t >>> 7), 61 | t)) ^ t;
-    return ((t ^ (t >>> 14)) >>> 0) / 2 ** 32;
-  };
-}
 
 // A ball with a 2-voxel probability ramp and +-20 noise, in a box of odd dims (axis mix-ups show).
 function ballFrame(dims = [17, 14, 12], centre = [8.3, 6.9, 5.6], radius = 4.5, seed = 1) {

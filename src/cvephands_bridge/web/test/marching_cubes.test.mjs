@@ -7,6 +7,7 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import { CASES, marchingCubes } from '../src/marching_cubes.js';
+import { random } from './random.mjs';
 
 const ISO = 153.5;
 // Cell corners and edges (Bourke's numbering, as marching_cubes_cases.h).
@@ -16,17 +17,6 @@ const CORNER = [
 const EDGE = [
   [0, 1], [1, 2], [3, 2], [0, 3], [4, 5], [5, 6], [7, 6], [4, 7], [0, 4], [1, 5], [2, 6], [3, 7],
 ];
-
-// mulberry32: deterministic noise without a seedable RNG package.
-function random(seed) {
-  let s = seed >>> 0;
-  return () => {
-    s = (s + 0x6d2b79f5) >>> 0;
-    let t = Math.imul(s ^ (s >>> 15), 1 | s);
-    t = (t + Math.imul(t ^ (t >>> 7), 61 | t)) ^ t;
-    return ((t ^ (t >>> 14)) >>> 0) / 2 ** 32;
-  };
-}
 
 // Bytes round(255 * clamp(0.5 - sd / width)) at the voxel centres (synthetic_volumes.h's
 // sampleSdf).

@@ -27,6 +27,7 @@
 
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/reconstructor.h"
+#include "tabletop_capture/cli_args.h"
 #include "tabletop_capture/ros/sim_truth_msgs.h"
 #include "tabletop_capture/running_stats.h"
 #include "tabletop_capture/sim/simulated_rig.h"
@@ -131,27 +132,18 @@ int runBag(const std::string& path, sim::TrackingEvaluator* ev) {
 int main(int argc, char** argv) {
   std::string script = "all", out = ".", bag;
   int frames = 0, seed = 1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        usage();
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--script") script = next();
-    else if (a == "--frames") frames = std::stoi(next());
-    else if (a == "--seed") seed = std::stoi(next());
-    else if (a == "--out") out = next();
-    else if (a == "--bag") bag = next();
-    else if (a == "-h" || a == "--help") {
+  tabletop_capture::CliArgs args("track_eval", argc, argv, usage);
+  while (args.next()) {
+    if (args.is("--script")) script = args.text();
+    else if (args.is("--frames")) frames = static_cast<int>(args.integer(0));
+    else if (args.is("--seed")) seed = static_cast<int>(args.integer());
+    else if (args.is("--out")) out = args.text();
+    else if (args.is("--bag")) bag = args.text();
+    else if (args.help()) {
       usage();
       return 0;
     } else {
-      std::fprintf(stderr, "track_eval: unknown option '%s'\n", a.c_str());
-      usage();
-      return 2;
+      args.unknown();
     }
   }
   ::mkdir(out.c_str(), 0755);

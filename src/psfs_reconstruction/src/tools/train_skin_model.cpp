@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "psfs_reconstruction/color_space.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
 #include "psfs_reconstruction/labelled_pixels.h"
+#include "tabletop_capture/cli_args.h"
 
 namespace {
 
@@ -69,55 +71,36 @@ int main(int argc, char** argv) {
   cmdline << "train_skin_model";
   for (int i = 1; i < argc; ++i) cmdline << " " << argv[i];
 
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "missing value after %s\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    try {
-      if (a == "--data")
-        files.emplace_back(next(), order);
-      else if (a == "--order") {
-        const std::string o = next();
-        if (o == "bgr")
-          order = psfs::ChannelOrder::BGR;
-        else if (o == "rgb")
-          order = psfs::ChannelOrder::RGB;
-        else {
-          std::fprintf(stderr, "--order must be bgr or rgb\n");
-          return 2;
-        }
-      } else if (a == "--skin-label")
-        skin_label = std::stoi(next());
-      else if (a == "--out")
-        out = next();
-      else if (a == "--components")
-        opt.components = std::stoi(next());
-      else if (a == "--holdout")
-        holdout = std::stod(next());
-      else if (a == "--split-seed")
-        split_seed = std::stoull(next());
-      else if (a == "--em-seed")
-        opt.seed = std::stoull(next());
-      else if (a == "--nonskin-components")
-        nonskin_k = std::stoi(next());
-      else if (a == "--note")
-        note = next();
-      else if (a == "-h" || a == "--help") {
-        usage();
-        return 0;
-      } else {
-        std::fprintf(stderr, "unknown argument %s\n", a.c_str());
-        usage();
-        return 2;
-      }
-    } catch (const std::exception&) {
-      std::fprintf(stderr, "bad value for %s\n", a.c_str());
-      return 2;
+  tabletop_capture::CliArgs args("train_skin_model", argc, argv, usage);
+  while (args.next()) {
+    if (args.is("--data")) {
+      files.emplace_back(args.text(), order);
+    } else if (args.is("--order")) {
+      const std::string o = args.text();
+      if (o == "bgr") order = psfs::ChannelOrder::BGR;
+      else if (o == "rgb") order = psfs::ChannelOrder::RGB;
+      else args.fail("--order must be bgr or rgb, got '" + o + "'");
+    } else if (args.is("--skin-label")) {
+      skin_label = static_cast<int>(args.integer());
+    } else if (args.is("--out")) {
+      out = args.text();
+    } else if (args.is("--components")) {
+      opt.components = static_cast<int>(args.integer(1, 16));
+    } else if (args.is("--holdout")) {
+      holdout = args.number(0.0, 0.99);
+    } else if (args.is("--split-seed")) {
+      split_seed = static_cast<unsigned long long>(args.integer(0, std::numeric_limits<long long>::max()));
+    } else if (args.is("--em-seed")) {
+      opt.seed = static_cast<decltype(opt.seed)>(args.integer(0, std::numeric_limits<long long>::max()));
+    } else if (args.is("--nonskin-components")) {
+      nonskin_k = static_cast<int>(args.integer(0, 16));
+    } else if (args.is("--note")) {
+      note = args.text();
+    } else if (args.help()) {
+      usage();
+      return 0;
+    } else {
+      args.unknown();
     }
   }
   if (files.empty()) {

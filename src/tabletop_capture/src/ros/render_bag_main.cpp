@@ -7,8 +7,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <string>
 
+#include "tabletop_capture/cli_args.h"
 #include "tabletop_capture/ros/sim_bag_writer.h"
 
 namespace {
@@ -34,35 +36,27 @@ void usage() {
 int main(int argc, char** argv) {
   tabletop_capture::sim::SimOptions so;
   tabletop_capture::SimBagOptions bo;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> const char* {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "render_bag: %s needs a value\n", a.c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (a == "--out") bo.path = next();
-    else if (a == "--frames") bo.frames = std::atoi(next());
-    else if (a == "--cameras") so.num_cameras = std::atoi(next());
-    else if (a == "--width") so.width = std::atoi(next());
-    else if (a == "--height") so.height = std::atoi(next());
-    else if (a == "--fps") so.fps = std::atof(next());
-    else if (a == "--script") so.script = next();
-    else if (a == "--empty-frames") so.empty_frames = std::atoi(next());
-    else if (a == "--seed") so.seed = std::strtoull(next(), nullptr, 10);
-    else if (a == "--noise") so.noise_sigma = std::atof(next());
-    else if (a == "--bayer") so.bayer = next();
-    else if (a == "--short-sleeves") so.short_sleeves = true;
-    else if (a == "--no-compress") bo.lz4 = false;
-    else if (a == "-h" || a == "--help") {
+  tabletop_capture::CliArgs args("render_bag", argc, argv, usage);
+  while (args.next()) {
+    if (args.is("--out")) bo.path = args.text();
+    else if (args.is("--frames")) bo.frames = static_cast<int>(args.integer(1));
+    else if (args.is("--cameras")) so.num_cameras = static_cast<int>(args.integer(1, 16));
+    else if (args.is("--width")) so.width = static_cast<int>(args.integer(16, 8192));
+    else if (args.is("--height")) so.height = static_cast<int>(args.integer(16, 8192));
+    else if (args.is("--fps")) so.fps = args.number(0.1, 1000.0);
+    else if (args.is("--script")) so.script = args.text();
+    else if (args.is("--empty-frames")) so.empty_frames = static_cast<int>(args.integer(0));
+    else if (args.is("--seed"))
+      so.seed = static_cast<decltype(so.seed)>(args.integer(0, std::numeric_limits<long long>::max()));
+    else if (args.is("--noise")) so.noise_sigma = args.number(0.0, 255.0);
+    else if (args.is("--bayer")) so.bayer = args.text();
+    else if (args.is("--short-sleeves")) so.short_sleeves = true;
+    else if (args.is("--no-compress")) bo.lz4 = false;
+    else if (args.help()) {
       usage();
       return 0;
     } else {
-      std::fprintf(stderr, "render_bag: unknown option '%s'\n", a.c_str());
-      usage();
-      return 2;
+      args.unknown();
     }
   }
   if (bo.path.empty()) {
