@@ -289,16 +289,26 @@ __attribute__((target("avx2,fma"))) void rowAvx2(const PsfsRowParams& p, const u
 // same integer and float operations lane by lane, so the same bytes. Masks replace blends.
 #define PSFS_AVX512 __attribute__((target("avx512f,avx512bw,avx2,fma"), always_inline)) inline
 
-PSFS_AVX512 __m512i bilinear512(const KernelView& v, __m512i su, __m512i sv) {
-  const __m512i u0 = _mm512_srli_epi32(su, 4), fu = _mm512_and_si512(su, _mm512_set1_epi32(15));
-  const __m512i v0 = _mm512_srli_epi32(sv, 4), fv = _mm512_and_si512(sv, _mm512_set1_epi32(15));
-  const __m512i idx = _mm512_add_epi32(_mm512_mullo_epi32(v0, _mm512_set1_epi32(v.quad_stride)), u0);
+// Bilinear sample at the padded fixed-point position packed as 16-bit (u | v << 16) per lane,
+// the same integers as bilinear() (all positions lie in [0, 65535]: PackedUV::kMaxImageSide).
+// Packed 16-bit arithmetic replaces the split/multiply/add of the index and the weights:
+// idx = u0 + v0 * stride in one madd, the weight bytes and words from byte shuffles.
+PSFS_AVX512 __m512i bilinear512(const KernelView& v, __m512i s) {
+  const __m512i idx = _mm512_madd_epi16(_mm512_srli_epi16(s, 4),
+                                        _mm512_set1_epi32(1 | (v.quad_stride << 16)));
   const __m512i q = _mm512_i32gather_epi32(idx, v.pairs, 2);
-  const __m512i wv = _mm512_add_epi32(_mm512_mullo_epi32(fv, _mm512_set1_epi32(0x00FF00FF)),
-                                      _mm512_set1_epi32(0x00100010));
+  const __m512i f = _mm512_and_si512(s, _mm512_set1_epi32(0x000F000F));  // fu | fv << 16
+  // Vertical weights, bytes (16 - fv, fv, 16 - fv, fv): fv (byte 2) into every byte, then
+  // 16 - fv in the even ones.
+  const __m512i fv4 = _mm512_shuffle_epi8(
+      f, _mm512_set4_epi32(0x0E0E0E0E, 0x0A0A0A0A, 0x06060606, 0x02020202));
+  const __m512i wv = _mm512_mask_sub_epi8(fv4, __mmask64(0x5555555555555555ull),
+                                          _mm512_set1_epi8(16), fv4);
   const __m512i lr = _mm512_maddubs_epi16(q, wv);
-  const __m512i wu = _mm512_add_epi32(_mm512_sub_epi32(_mm512_slli_epi32(fu, 16), fu),
-                                      _mm512_set1_epi32(16));
+  // Horizontal weights, words (16 - fu, fu): fu (byte 0) into both words, then 16 - fu below.
+  const __m512i fu2 = _mm512_shuffle_epi8(
+      f, _mm512_set4_epi32(int(0x800C800Cu), int(0x80088008u), int(0x80048004u), int(0x80008000u)));
+  const __m512i wu = _mm512_mask_sub_epi16(fu2, __mmask32(0x55555555u), _mm512_set1_epi16(16), fu2);
   return _mm512_madd_epi16(lr, wu);
 }
 
@@ -315,15 +325,14 @@ PSFS_AVX512 __m512i pairOf(int32_t lo, int32_t hi) {
 
 PSFS_AVX512 __m512i medianPair512(const KernelView& v, __m512i uv, const uint32_t* off0,
                                   const uint32_t* off1) {
-  const __m512i pad = _mm512_set1_epi32(kPad16);
-  const __m512i uf = _mm512_add_epi32(_mm512_and_si512(uv, _mm512_set1_epi32(0xFFFF)), pad);
-  const __m512i vf = _mm512_add_epi32(_mm512_srli_epi32(uv, 16), pad);
+  // Both halves of uv plus the pad, as 16-bit lanes; the offsets are packed (du | dv << 16)
+  // int16 pairs already, so one 16-bit add / sub gives both coordinates of a sample.
+  const __m512i p = _mm512_add_epi16(uv, _mm512_set1_epi16(kPad16));
   __m512i s[6];
   for (int a = 0; a < 3; ++a) {
-    const __m512i du = pairOf(static_cast<int16_t>(off0[a] & 0xFFFFu), static_cast<int16_t>(off1[a] & 0xFFFFu));
-    const __m512i dv = pairOf(static_cast<int32_t>(off0[a]) >> 16, static_cast<int32_t>(off1[a]) >> 16);
-    s[2 * a] = bilinear512(v, _mm512_add_epi32(uf, du), _mm512_add_epi32(vf, dv));
-    s[2 * a + 1] = bilinear512(v, _mm512_sub_epi32(uf, du), _mm512_sub_epi32(vf, dv));
+    const __m512i d = pairOf(static_cast<int32_t>(off0[a]), static_cast<int32_t>(off1[a]));
+    s[2 * a] = bilinear512(v, _mm512_add_epi16(p, d));
+    s[2 * a + 1] = bilinear512(v, _mm512_sub_epi16(p, d));
   }
   cswap512(s[0], s[5]), cswap512(s[1], s[3]), cswap512(s[2], s[4]);
   cswap512(s[1], s[2]), cswap512(s[3], s[4]);

@@ -34,7 +34,9 @@ namespace psfs {
 struct PackedUV {
   static constexpr int kFracBits = 4;
   static constexpr int kOne = 1 << kFracBits;
-  static constexpr int kMaxImageSide = 4095;  // 16 * side must fit 16 bits
+  // 16 * side plus the pair images' pad and the largest sample offset (8 + 7 px) must fit 16
+  // bits: the multi-projection kernels add them in 16-bit lanes.
+  static constexpr int kMaxImageSide = 4080;
   static uint32_t notObserved(int height) { return static_cast<uint32_t>(kOne * height) << 16; }
   static int pixelIndex(uint32_t p, int width) {
     return static_cast<int>(p >> (16 + kFracBits)) * width + static_cast<int>((p & 0xFFFFu) >> kFracBits);
