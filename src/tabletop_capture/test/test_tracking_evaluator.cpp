@@ -96,6 +96,46 @@ TEST(TrackingEvaluator, LeavingAndReenteringTimesLossAndReacquisition) {
   EXPECT_EQ(ev.falseTargetFrames(), 5);  // track 1 while its hand was gone
 }
 
+TEST(TrackingEvaluator, FoldedHandsMergeAndSplitWithoutLossOrSwitch) {
+  TrackingEvaluator ev;
+  // Frames 10-29 the hands are clasped 2 cm apart and the tracker reports one target (the right
+  // hand's id 2); from frame 30 they are apart again and the left hand gets its id 1 back.
+  for (int i = 0; i < 50; ++i) {
+    TruthPoints tr = truthAt(0.0);
+    const bool clasped = i >= 10 && i < 30;
+    if (clasped) tr.position[0] = tr.position[1] + Eigen::Vector3d(-0.02, 0.0, 0.0);
+    std::vector<TrackedPoint> tracks = {track(2, true, tr.position[1]),
+                                        track(3, false, tr.position[2])};
+    if (!clasped) tracks.push_back(track(1, true, tr.position[0]));
+    ev.add(i * kDt, tracks, tr);
+  }
+  const auto& left = ev.report(0);
+  EXPECT_EQ(left.losses, 0);
+  EXPECT_EQ(left.identity_switches, 0);
+  EXPECT_EQ(left.merges, 1);
+  EXPECT_EQ(left.splits_recovered, 1);
+  EXPECT_EQ(left.tracked_frames, 50);  // the shared target counts for the clasped hand
+  EXPECT_EQ(ev.report(1).identity_switches, 0);
+  EXPECT_EQ(ev.report(1).merges, 0);
+}
+
+TEST(TrackingEvaluator, ASplitUnderANewIdIsASwitch) {
+  TrackingEvaluator ev;
+  for (int i = 0; i < 50; ++i) {
+    TruthPoints tr = truthAt(0.0);
+    const bool clasped = i >= 10 && i < 30;
+    if (clasped) tr.position[0] = tr.position[1] + Eigen::Vector3d(-0.02, 0.0, 0.0);
+    std::vector<TrackedPoint> tracks = {track(2, true, tr.position[1]),
+                                        track(3, false, tr.position[2])};
+    if (i < 10) tracks.push_back(track(1, true, tr.position[0]));
+    if (i >= 30) tracks.push_back(track(7, true, tr.position[0]));  // not the left hand's id
+    ev.add(i * kDt, tracks, tr);
+  }
+  EXPECT_EQ(ev.report(0).merges, 1);
+  EXPECT_EQ(ev.report(0).splits_recovered, 0);
+  EXPECT_EQ(ev.report(0).identity_switches, 1);
+}
+
 TEST(TrackingEvaluator, TrackDyingInViewIsALoss) {
   TrackingEvaluator ev;
   for (int i = 0; i < 30; ++i) {

@@ -48,10 +48,12 @@ void TrackingEvaluator::add(double time, const std::vector<TrackedPoint>& tracke
       if (b.bound && !track) {
         if (b.left_at >= 0) r.loss_report_delay_s.add(time - b.left_at);
         b.bound = false;
+        b.merged = false;
         b.left_at = -1.0;
       } else if (b.bound && b.left_at >= 0 && time - b.left_at > 1.0) {
         ++r.unreported_exits;  // counted once: the binding is released
         b.bound = false;
+        b.merged = false;
         b.left_at = -1.0;
       }
       b.visible_since = -1.0;
@@ -64,9 +66,21 @@ void TrackingEvaluator::add(double time, const std::vector<TrackedPoint>& tracke
     was_visible_[t] = true;
     b.left_at = -1.0;
 
+    if (b.bound && !track && hand) {  // merged with the other hand's target?
+      const Binding& o = bind_[1 - t];
+      const TrackedPoint* other = o.bound ? findTrack(tracked, o.id, true) : nullptr;
+      if (other && (other->position - truth_pos).norm() <= params_.match_radius) {
+        ++r.merges;
+        if (!b.merged) b.own_id = b.id;
+        b.merged = true;
+        b.id = other->id;
+        track = other;
+      }
+    }
     if (b.bound && !track) {  // the bound track died while the truth is in view
       ++r.losses;
       b.bound = false;
+      b.merged = false;
       b.visible_since = time;
     }
     // Nearest active track of the right type.
@@ -85,11 +99,18 @@ void TrackingEvaluator::add(double time, const std::vector<TrackedPoint>& tracke
         ++r.acquisitions;
         if (b.visible_since >= 0) r.acquisition_delay_s.add(time - b.visible_since);
       }
+    } else if (b.merged && nearest && nearest->id == b.own_id && best <= params_.match_radius) {
+      // The split: the hand's own target is back.
+      ++r.splits_recovered;
+      b.merged = false;
+      b.id = nearest->id;
+      track = nearest;
     } else if (nearest && nearest->id != b.id) {
       const double bound_d = (track->position - truth_pos).norm();
       if (bound_d > params_.match_radius && best + params_.switch_margin < bound_d &&
           best <= params_.match_radius) {
         ++r.identity_switches;
+        b.merged = false;
         b.id = nearest->id;
         track = nearest;
       }
@@ -145,6 +166,11 @@ std::string TrackingEvaluator::summary() const {
       if (!isHandTarget(t)) {
         std::snprintf(buf, sizeof(buf), " | aligned %.1f mm (bias removed, thesis 7.1)",
                       r.alignedErrorMeanMm());
+        s += buf;
+      }
+      if (r.merges > 0) {
+        std::snprintf(buf, sizeof(buf), " | merged with the other hand %d time(s), own id back %d",
+                      r.merges, r.splits_recovered);
         s += buf;
       }
       if (r.acquisition_delay_s.count() > 0) {

@@ -10,6 +10,11 @@
 // re-acquisition). If another track of the same type is nearer than the bound one by more than
 // switch_margin while both are active and the bound one is outside match_radius, the binding
 // moves and an identity switch is counted.
+// Folded hands: when a hand's bound track dies while the other hand's track is within
+// match_radius of it, the hands have merged into one target (DESIGN.md: clasped hands are one
+// target). That is counted as a merge, not a loss; the hand follows the shared track, and when
+// a track with its own earlier id comes back (the split) it returns to it without counting an
+// identity switch. A different id after the split is a switch.
 #pragma once
 
 #include <array>
@@ -72,6 +77,8 @@ class TrackingEvaluator {
     int losses = 0;               // bound track died (or went inactive) while visible
     int identity_switches = 0;
     int acquisitions = 0;         // bindings made (first acquisition + re-acquisitions)
+    int merges = 0;               // merged with the other hand into one target
+    int splits_recovered = 0;     // back on its own id after a merge
     // Delays (s): from the truth leaving the workspace to its track going inactive, and from
     // the truth becoming visible to a track being bound.
     RunningStats loss_report_delay_s, acquisition_delay_s;
@@ -91,6 +98,8 @@ class TrackingEvaluator {
   struct Binding {
     bool bound = false;
     uint32_t id = 0;
+    bool merged = false;          // following the other hand's track since a merge
+    uint32_t own_id = 0;          // the id it had before the merge
     double visible_since = -1.0;  // time the truth became visible (waiting for a binding)
     double left_at = -1.0;        // time the truth stopped being visible with a bound track
   };
