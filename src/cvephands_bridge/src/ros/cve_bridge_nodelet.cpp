@@ -21,6 +21,7 @@
 
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/room_client.h"
+#include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/running_stats.h"
 
 namespace cvephands {
@@ -29,13 +30,9 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-    diag_->setHardwareID("cve_bridge");
-    diag_->add("cve bridge", this, &CveBridgeNodelet::diagnose);
-    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
-      diag_->force_update();
-    };
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+        nh, pnh, getName(), "cve_bridge", "cve bridge",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
 
     int port = 8765, bits = 2, keyframes = 25, queue = 16;
     pnh.param("server_host", options_.host, std::string("127.0.0.1"));
@@ -153,8 +150,6 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    const ros::WallTime now = ros::WallTime::now();
-    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
     const bool online = client_ && client_->connected();
     if (!online)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN,
@@ -167,7 +162,7 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     stat.add("hand messages sent", sent_);
     stat.add("hands dropped while disconnected", dropped_offline_);
     stat.add("volumes rejected", rejected_);
-    stat.add("send rate (kbit/s)", dt > 0 ? 8e-3 * double(bytes_sent_ - bytes_at_last_) / dt : 0.0);
+    stat.add("send rate (kbit/s)", 8e-3 * byte_rate_.rate(bytes_sent_));
     stat.add("message size, mean (bytes)", message_bytes_.mean());
     stat.add("encode per hand (ms)", encode_ms_.mean());
     if (client_) {
@@ -175,8 +170,6 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       stat.add("send queue drops", s.send_dropped);
       stat.add("hand messages received", s.received);
     }
-    last_diag_ = now;
-    bytes_at_last_ = bytes_sent_;
   }
 
   RoomClientOptions options_;
@@ -186,13 +179,13 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   HandFrame frame_;
   std::string fatal_, last_error_;
   ros::Subscriber sub_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_, connect_timer_;
+  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
+  ros::WallTimer connect_timer_;
   std::mutex mutex_;
   std::atomic<bool> key_frames_needed_{false};
-  ros::WallTime last_diag_;
   uint64_t frames_ = 0, sent_ = 0, dropped_offline_ = 0, rejected_ = 0, connects_ = 0;
-  uint64_t bytes_sent_ = 0, bytes_at_last_ = 0;
+  uint64_t bytes_sent_ = 0;
+  tabletop_capture::RateMeter byte_rate_;
   tabletop_capture::RunningStats encode_ms_, message_bytes_;
 };
 

@@ -29,6 +29,7 @@
 #include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/mesh_components.h"
 #include "cvephands_bridge/ros/mesh_conversions.h"
+#include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/running_stats.h"
 
 namespace cvephands {
@@ -37,13 +38,9 @@ class HandMesherNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-    diag_->setHardwareID("hand_mesher");
-    diag_->add("hand meshing", this, &HandMesherNodelet::diagnose);
-    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
-      diag_->force_update();
-    };
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+        nh, pnh, getName(), "hand_mesher", "hand meshing",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     try {
       mc_ = std::make_unique<MarchingCubes>(loadOptions(pnh));
     } catch (const std::exception& e) {
@@ -150,9 +147,7 @@ class HandMesherNodelet : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    const ros::WallTime now = ros::WallTime::now();
-    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
-    const double rate = dt > 0 ? (frames_ - frames_at_last_) / dt : 0.0;
+    const double rate = rate_.rate(frames_);
     if (frames_ == 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for hand volumes");
     else if (rejected_ > rejected_at_last_)
@@ -166,8 +161,6 @@ class HandMesherNodelet : public nodelet::Nodelet {
     stat.add("meshing per hand, max (ms)", mesh_ms_.count() ? mesh_ms_.max() : 0.0);
     stat.add("triangles per hand", triangles_.mean());
     stat.add("volumes rejected", rejected_);
-    last_diag_ = now;
-    frames_at_last_ = frames_;
     rejected_at_last_ = rejected_;
   }
 
@@ -179,12 +172,11 @@ class HandMesherNodelet : public nodelet::Nodelet {
   std_msgs::ColorRGBA color_;
   ros::Subscriber sub_;
   ros::Publisher mesh_pub_, marker_pub_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
   std::mutex mutex_;
   std::set<uint32_t> last_ids_;
-  ros::WallTime last_diag_;
-  uint64_t frames_ = 0, frames_at_last_ = 0, rejected_ = 0, rejected_at_last_ = 0, meshed_ = 0;
+  tabletop_capture::RateMeter rate_;
+  uint64_t frames_ = 0, rejected_ = 0, rejected_at_last_ = 0, meshed_ = 0;
   tabletop_capture::RunningStats mesh_ms_, triangles_;
 };
 

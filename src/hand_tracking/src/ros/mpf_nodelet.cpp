@@ -23,6 +23,7 @@
 
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
+#include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/running_stats.h"
 
 namespace hand_tracking {
@@ -87,13 +88,9 @@ class MpfNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-    diag_->setHardwareID("mpf");
-    diag_->add("mpf hand tracking", this, &MpfNodelet::diagnose);
-    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
-      diag_->force_update();
-    };
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+        nh, pnh, getName(), "mpf", "mpf hand tracking",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     int seed = 1;
     pnh.param("seed", seed, seed);
     pnh.param("publish_particles", publish_particles_, false);
@@ -266,9 +263,7 @@ class MpfNodelet : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
-    const ros::WallTime now = ros::WallTime::now();
-    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
-    const double rate = dt > 0 ? (frames_ - frames_at_last_) / dt : 0.0;
+    const double rate = rate_.rate(frames_);
     if (frames_ == 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for volumes");
     else if (rejected_ > rejected_at_last_)
@@ -287,8 +282,6 @@ class MpfNodelet : public nodelet::Nodelet {
     stat.add("splits", splits_);
     stat.add("losses", losses_);
     stat.add("volumes rejected", rejected_);
-    last_diag_ = now;
-    frames_at_last_ = frames_;
     rejected_at_last_ = rejected_;
   }
 
@@ -298,14 +291,13 @@ class MpfNodelet : public nodelet::Nodelet {
   ros::Subscriber skin_sub_, body_sub_;
   ros::Publisher targets_pub_, markers_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
   std::mutex pair_mutex_, mutex_;
   tabletop_msgs::VoxelVolume::ConstPtr pending_skin_, pending_body_;
   psfs::ProbabilityVolume skin_, body_;
   ros::Time last_stamp_;
-  ros::WallTime last_diag_;
-  uint64_t frames_ = 0, frames_at_last_ = 0, rejected_ = 0, rejected_at_last_ = 0;
+  tabletop_capture::RateMeter rate_;
+  uint64_t frames_ = 0, rejected_ = 0, rejected_at_last_ = 0;
   uint64_t births_ = 0, merges_ = 0, splits_ = 0, losses_ = 0;
   int active_ = 0;
   tabletop_capture::RunningStats total_ms_, integral_ms_, weights_ms_, reconfigure_ms_;

@@ -38,6 +38,7 @@
 #include "psfs_reconstruction/reconstructor_config.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
 #include "tabletop_capture/ros/conversions.h"
+#include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/running_stats.h"
 
 namespace psfs {
@@ -52,13 +53,9 @@ class PsfsNodelet : public nodelet::Nodelet {
         ros::package::getPath("psfs_reconstruction") + "/config/psfs.yaml";
     pnh.param("config_file", config_file, config_file);
     pnh.param("world_frame", world_frame_, std::string("world"));
-    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-    diag_->setHardwareID("psfs");
-    diag_->add("psfs reconstruction", this, &PsfsNodelet::diagnose);
-    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
-      diag_->force_update();
-    };
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
+    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+        nh, pnh, getName(), "psfs", "psfs reconstruction",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     try {
       cfg_ = loadReconstructorConfig(config_file);
       if (pnh.hasParam("threads")) pnh.getParam("threads", cfg_.params.threads);
@@ -316,9 +313,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       return;
     }
     std::lock_guard<std::mutex> lock(stats_mutex_);
-    const ros::WallTime now = ros::WallTime::now();
-    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
-    const double rate = dt > 0 ? (reconstructed_ - reconstructed_at_last_) / dt : 0.0;
+    const double rate = rate_.rate(reconstructed_);
     if (processed_ == 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for frame sets");
     else if (learning_)
@@ -344,8 +339,6 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("total (ms)", total_ms_.mean());
     stat.add("total max (ms)", total_ms_.max());
     stat.add("volume", workspaceGrid(cfg_.params.workspace, cfg_.params.dims).describe());
-    last_diag_ = now;
-    reconstructed_at_last_ = reconstructed_;
     rejected_at_last_ = rejected_;
     warnings_at_last_ = warnings_;
   }
@@ -356,8 +349,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   ros::Subscriber frames_sub_, roi_sub_;
   std::vector<ros::Subscriber> mask_subs_;
   ros::Publisher body_pub_, skin_pub_, hands_pub_, body_cloud_pub_, skin_cloud_pub_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
 
   std::mutex roi_mutex_;
   tabletop_msgs::TrackedTargets::ConstPtr targets_;
@@ -367,10 +359,10 @@ class PsfsNodelet : public nodelet::Nodelet {
   bool load_tried_ = false, announced_ready_ = false, learning_ = true;
   int learned_ = 0, cameras_off_ = 0;
   uint64_t processed_ = 0, reconstructed_ = 0, rejected_ = 0, warnings_ = 0;
-  uint64_t reconstructed_at_last_ = 0, rejected_at_last_ = 0, warnings_at_last_ = 0;
+  uint64_t rejected_at_last_ = 0, warnings_at_last_ = 0;
+  tabletop_capture::RateMeter rate_;
   std::string last_error_;
   std::map<std::string, ros::WallTime> warned_;
-  ros::WallTime last_diag_;
   // Per-stage times over the whole run (the demo's summary reads the means).
   RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
 };

@@ -23,6 +23,7 @@
 #include "tabletop_capture/frame_set_assembler.h"
 #include "tabletop_capture/image_conversion.h"
 #include "tabletop_capture/ros/conversions.h"
+#include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/ros/published_frames.h"
 #include "tabletop_capture/running_stats.h"
 
@@ -78,17 +79,13 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       c.info_sub = nh.subscribe<sensor_msgs::CameraInfo>(c.name + "/camera_info", 5, on_info);
     }
     pub_ = nh.advertise<tabletop_msgs::MultiViewFrame>("frames", queue_size);
-    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-    diag_->setHardwareID("frame_synchronizer");
-    diag_->add("frame synchronizer", this, &FrameSynchronizerNodelet::diagnose);
+    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+        nh, pnh, getName(), "frame_synchronizer", "frame synchronizer",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     boost::function<void(const ros::WallTimerEvent&)> on_tick = [this](const ros::WallTimerEvent&) {
       onTick();
     };
     tick_ = nh.createWallTimer(ros::WallDuration(0.05), on_tick);
-    boost::function<void(const ros::WallTimerEvent&)> on_diag = [this](const ros::WallTimerEvent&) {
-      diag_->force_update();
-    };
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0), on_diag);
     NODELET_INFO("frame synchroniser: %d cameras (%s0..%s%d), tolerance %.4f s, timeout %.3f s",
                  num_cameras, prefix.c_str(), prefix.c_str(), num_cameras - 1, cfg.tolerance,
                  cfg.timeout);
@@ -306,8 +303,8 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   ros::Publisher pub_;
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer tick_, diag_timer_;
+  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
+  ros::WallTimer tick_;
   std::string world_frame_;
   double tf_timeout_ = 0.05;
   std::mutex mutex_;

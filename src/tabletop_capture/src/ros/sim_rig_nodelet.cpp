@@ -19,6 +19,7 @@
 
 #include "tabletop_capture/rig_description.h"
 #include "tabletop_capture/ros/conversions.h"
+#include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/ros/sim_truth_msgs.h"
 #include "tabletop_capture/running_stats.h"
 #include "tabletop_capture/sim/simulated_rig.h"
@@ -100,11 +101,9 @@ class SimRigNodelet : public nodelet::Nodelet {
     }
     world_frame_ = rig.world_frame;
 
-    diag_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-    diag_->setHardwareID("simulated_rig");
-    diag_->add("simulated rig", this, &SimRigNodelet::diagnose);
-    diag_timer_ = nh.createWallTimer(ros::WallDuration(1.0),
-                                     [this](const ros::WallTimerEvent&) { diag_->force_update(); });
+    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+        nh, pnh, getName(), "simulated_rig", "simulated rig",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     NODELET_INFO("simulated rig: %zu cameras %dx%d at %.1f fps, script '%s', %d empty frames, "
                  "seed %d, encoding %s",
                  rig.cameras.size(), o.width, o.height, o.fps, o.script.c_str(), o.empty_frames,
@@ -176,11 +175,7 @@ class SimRigNodelet : public nodelet::Nodelet {
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const ros::WallTime now = ros::WallTime::now();
-    const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
-    const double rate = dt > 0 ? (published_ - published_at_last_diag_) / dt : 0.0;
-    last_diag_ = now;
-    published_at_last_diag_ = published_;
+    const double rate = rate_.rate(static_cast<uint64_t>(published_));
     if (!sim_) {
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started (see log)");
       return;
@@ -204,8 +199,7 @@ class SimRigNodelet : public nodelet::Nodelet {
   int truth_every_ = 0;
   Eigen::Vector3i truth_dims_{64, 64, 48};
   tf2_ros::StaticTransformBroadcaster static_tf_;
-  std::unique_ptr<diagnostic_updater::Updater> diag_;
-  ros::WallTimer diag_timer_;
+  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
   std::string encoding_, world_frame_;
   int max_frames_ = 0;
   double start_delay_ = 1.0;
@@ -214,9 +208,9 @@ class SimRigNodelet : public nodelet::Nodelet {
   std::atomic<bool> running_{false};
   std::mutex mutex_;
   RunningStats render_ms_;
-  int published_ = 0, published_at_last_diag_ = 0;
+  int published_ = 0;
+  tabletop_capture::RateMeter rate_;
   uint64_t overruns_ = 0;
-  ros::WallTime last_diag_;
 };
 
 }  // namespace tabletop_capture
