@@ -3,7 +3,8 @@
 // seat fixes where the rig's `world` frame (DESIGN.md section 3) lies in the common ROOM frame,
 // so every user's hands appear at their own place around one table. The server relays hand
 // messages between the participants of a room without looking inside them (they are the hand
-// stream codec's messages, hand_stream_codec.h).
+// stream codec's messages, hand_stream_codec.h, magic "CVHS", or face pictures, face_video.h,
+// magic "CVVF"; a client tells them apart by the first 4 bytes and ignores other magics).
 //
 // Transport: one WebSocket (RFC 6455) per participant, on path /ws of the room server (the same
 // port also serves the browser client's static files over plain HTTP GET).

@@ -4,6 +4,9 @@
 // RoomClient (WebSocket) to the room server, which relays it to the other participants.
 // The connection is (re)made from a wall timer, never from the volume callback, so a missing or
 // slow server costs the pipeline nothing: hands are dropped (counted) while disconnected.
+// With face_video on it also sends the user's face (thesis 7.5): frames + hands/targets in, a
+// JPEG crop around the tracked head from the camera facing the user (face_video.h), at most
+// face_video_fps per second.
 //
 // Private parameters: config/cve_bridge.yaml documents each.
 #include <atomic>
@@ -18,9 +21,13 @@
 #include <ros/ros.h>
 
 #include <tabletop_msgs/HandVolumes.h>
+#include <tabletop_msgs/MultiViewFrame.h>
+#include <tabletop_msgs/TrackedTargets.h>
 
+#include "cvephands_bridge/face_video.h"
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/room_client.h"
+#include "tabletop_capture/ros/conversions.h"
 #include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/running_stats.h"
 
@@ -46,6 +53,10 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     pnh.param("keyframe_interval", keyframes, keyframes);
     double reconnect = 2.0;
     pnh.param("reconnect_interval", reconnect, reconnect);
+    pnh.param("face_video", face_video_, true);
+    pnh.param("face_video_fps", face_fps_, 10.0);
+    pnh.param("face_video_size", face_options_.size, face_options_.size);
+    pnh.param("face_video_quality", face_options_.jpeg_quality, face_options_.jpeg_quality);
     options_.port = static_cast<uint16_t>(port);
     options_.send_queue_length = static_cast<size_t>(std::max(1, queue));
     options_.join.role = room::Role::kRig;
@@ -59,6 +70,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       encoder_options_.validate();
       if (port < 1 || port > 65535) throw std::invalid_argument("server_port must be in 1..65535");
       if (!(reconnect > 0.0)) throw std::invalid_argument("reconnect_interval must be > 0");
+      face_options_.validate();
+      if (!(face_fps_ > 0.0 && face_fps_ <= 60.0)) throw std::invalid_argument("face_video_fps must be in (0, 60]");
     } catch (const std::exception& e) {
       fatal_ = e.what();
       NODELET_FATAL("cve_bridge: not started: bad parameters: %s", e.what());
@@ -69,6 +82,10 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     };
     connect_timer_ = nh.createWallTimer(ros::WallDuration(reconnect), on_connect);
     sub_ = nh.subscribe("psfs/hand_volumes", 2, &CveBridgeNodelet::onVolumes, this);
+    if (face_video_) {
+      targets_sub_ = nh.subscribe("hands/targets", 2, &CveBridgeNodelet::onTargets, this);
+      frames_sub_ = nh.subscribe("frames", 1, &CveBridgeNodelet::onFrames, this);
+    }
     NODELET_INFO("cve_bridge: %s -> ws://%s:%d%s room '%s' as '%s', %d-bit band codes",
                  sub_.getTopic().c_str(), options_.host.c_str(), port, options_.path.c_str(),
                  options_.join.room.c_str(), options_.join.name.c_str(), bits);
@@ -144,6 +161,65 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     }
   }
 
+  void onTargets(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    head_valid_ = false;
+    for (const auto& t : msg->targets) {
+      if (t.type != tabletop_msgs::TrackedTarget::HEAD || !t.active) continue;
+      head_ = Eigen::Vector3d(t.position.x, t.position.y, t.position.z);
+      head_valid_ = head_.allFinite();
+      head_stamp_ = msg->header.stamp;
+    }
+  }
+
+  // One face picture per 1 / face_video_fps s, while the head is tracked and the room is joined.
+  void onFrames(const tabletop_msgs::MultiViewFrame::ConstPtr& f) {
+    Eigen::Vector3d head;
+    std::shared_ptr<RoomClient> client;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const ros::WallTime now = ros::WallTime::now();
+      // The head of a frame set arrives after it (reconstruction + tracking): use the newest
+      // one within half a second; a head that is older than that is lost.
+      if (!head_valid_ || std::abs((f->header.stamp - head_stamp_).toSec()) > 0.5) return;
+      if (!last_face_.isZero() && (now - last_face_).toSec() < 1.0 / face_fps_) return;
+      if (!client_ || !client_->connected()) return;
+      last_face_ = now;
+      head = head_;
+      client = client_;
+    }
+    const size_t n = f->images.size();
+    if (f->camera_infos.size() != n || f->camera_poses.size() != n || n == 0) return;
+    std::vector<tabletop_capture::CameraModel> cams(n);
+    for (size_t i = 0; i < n; ++i) {
+      std::string why;
+      if (!tabletop_capture::fromCameraInfo(f->camera_infos[i], &cams[i], &why) ||
+          !tabletop_capture::fromTransform(f->camera_poses[i], &cams[i].world_T_camera)) {
+        NODELET_WARN_THROTTLE(10.0, "cve_bridge: face video: bad calibration of camera %zu", i);
+        return;
+      }
+    }
+    const int c = pickFaceCamera(cams, head);
+    if (c < 0) return;
+    const sensor_msgs::Image& im = f->images[c];
+    if (im.encoding != "rgb8" || im.step < 3 * im.width ||
+        im.data.size() < size_t(im.step) * im.height) {
+      NODELET_WARN_THROTTLE(10.0, "cve_bridge: face video: camera %d image is not a valid rgb8", c);
+      return;
+    }
+    const cv::Mat rgb(int(im.height), int(im.width), CV_8UC3, const_cast<uint8_t*>(im.data.data()),
+                      im.step);
+    cv::Mat face;
+    if (!cropFace(rgb, cams[c], head, face_options_, &face)) return;
+    std::vector<uint8_t> message =
+        encodeFaceMessage(f->header.stamp.sec, f->header.stamp.nsec, face, face_options_.jpeg_quality);
+    std::lock_guard<std::mutex> lock(mutex_);
+    face_bytes_ += message.size();
+    bytes_sent_ += message.size();
+    ++faces_sent_;
+    client->send(std::move(message));
+  }
+
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     if (!fatal_.empty()) {
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: " + fatal_);
@@ -165,6 +241,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     stat.add("send rate (kbit/s)", 8e-3 * byte_rate_.rate(bytes_sent_));
     stat.add("message size, mean (bytes)", message_bytes_.mean());
     stat.add("encode per hand (ms)", encode_ms_.mean());
+    stat.add("face pictures sent", faces_sent_);
+    stat.add("face video (kbit/s)", 8e-3 * face_rate_.rate(face_bytes_));
     if (client_) {
       const RoomClientStats s = client_->stats();
       stat.add("send queue drops", s.send_dropped);
@@ -184,7 +262,17 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   std::atomic<bool> key_frames_needed_{false};
   uint64_t frames_ = 0, sent_ = 0, dropped_offline_ = 0, rejected_ = 0, connects_ = 0;
-  uint64_t bytes_sent_ = 0;
+  uint64_t bytes_sent_ = 0, face_bytes_ = 0, faces_sent_ = 0;
+  tabletop_capture::RateMeter face_rate_;
+  // Face video.
+  bool face_video_ = true;
+  double face_fps_ = 10.0;
+  FaceVideoOptions face_options_;
+  ros::Subscriber targets_sub_, frames_sub_;
+  Eigen::Vector3d head_ = Eigen::Vector3d::Zero();
+  bool head_valid_ = false;
+  ros::Time head_stamp_;
+  ros::WallTime last_face_;
   tabletop_capture::RateMeter byte_rate_;
   tabletop_capture::RunningStats encode_ms_, message_bytes_;
 };

@@ -2,7 +2,8 @@
 // hand messages per second, kbit/s per hand, hands seen, and the latency from each hand's
 // capture stamp to its arrival here (the pipeline, the bridge and the relay; a browser adds its
 // own decoding, meshing and rendering). With --decode it also decodes and meshes every message
-// as a client would (C++ decoder + marching cubes), counting failures.
+// as a client would (C++ decoder + marching cubes), counting failures. Face video messages
+// (face_video.h) are counted apart (pictures per second, kbit/s).
 //
 //   room_watch [--host H] [--port N] [--room R] [--token T] [--seconds S] [--wait S] [--decode]
 //
@@ -23,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "cvephands_bridge/face_video.h"
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/room_client.h"
@@ -56,6 +58,7 @@ double percentile(std::vector<double> v, double q) {
 // Per sender, since the start.
 struct SenderStats {
   uint64_t messages = 0, bytes = 0, gaps = 0, decode_failures = 0;
+  uint64_t faces = 0, face_bytes = 0, bad_faces = 0;  // face video (face_video.h)
   uint32_t last_sequence = 0;
   bool any = false;
   double first = 0.0, last = 0.0;  // arrival of the first and the latest message (s)
@@ -113,11 +116,18 @@ int main(int argc, char** argv) {
     SenderStats& s = senders[h.sender];
     if (!s.any) s.first = received;
     s.last = received;
-    ++s.messages;
-    s.bytes += size;
     if (s.any && h.sequence != s.last_sequence + 1) s.gaps += h.sequence - s.last_sequence - 1;
     s.any = true;
     s.last_sequence = h.sequence;
+    if (cvephands::isFaceMessage(data, size)) {
+      cvephands::FaceMessage face;
+      ++s.faces;
+      s.face_bytes += size;
+      if (!cvephands::parseFaceMessage(data, size, &face, nullptr)) ++s.bad_faces;
+      return;
+    }
+    ++s.messages;
+    s.bytes += size;
     // Target id and stamp from the codec header (hand_stream_codec.h offsets 8 and 16), read
     // without decoding: latency is measured even for messages a decoder would reject.
     if (size >= 24) {
@@ -181,6 +191,9 @@ int main(int argc, char** argv) {
       if (decode)
         std::printf(", decode+mesh %.2f ms, %llu undecodable", percentile(s.decode_ms, 0.5),
                     static_cast<unsigned long long>(s.decode_failures));
+      if (s.faces)
+        std::printf("; face video %.1f pictures/s, %.0f kbit/s, %llu malformed", s.faces / elapsed,
+                    8e-3 * s.face_bytes / elapsed, static_cast<unsigned long long>(s.bad_faces));
       std::printf("\n");
     }
     std::fflush(stdout);

@@ -20,7 +20,7 @@ export class HandStreams {
     let s = this.senders.get(id);
     if (!s) {
       s = { decoder: new HandStreamDecoder(), lastSequence: -1, messages: 0, bytes: 0, missed: 0,
-        errors: 0, waiting: 0, superseded: 0, lastError: '' };
+        errors: 0, waiting: 0, superseded: 0, lastError: '', faces: 0, badFaces: 0 };
       this.senders.set(id, s);
     }
     return s;
@@ -30,14 +30,20 @@ export class HandStreams {
     for (const id of this.senders.keys()) if (!keepIds.has(id)) this.senders.delete(id);
   }
 
-  // Decodes one relayed message; false for a bad or undecodable one (counted on the sender).
+  // Every relayed message of a sender (hands and face pictures): the server's per-sender count
+  // shows what it dropped for us (a slow reader).
+  noteSequence(relay) {
+    const s = this.sender(relay.sender);
+    if (s.lastSequence >= 0) s.missed += (relay.sequence - s.lastSequence - 1) >>> 0;
+    s.lastSequence = relay.sequence;
+    return s;
+  }
+
+  // Decodes one relayed hand message; false for a bad or undecodable one (counted on the sender).
   decode(relay) {
     const s = this.sender(relay.sender);
     ++s.messages;
     s.bytes += relay.payload.byteLength;
-    // The server's per-sender count shows what it dropped for us (a slow reader).
-    if (s.lastSequence >= 0) s.missed += (relay.sequence - s.lastSequence - 1) >>> 0;
-    s.lastSequence = relay.sequence;
     const t0 = nowMs();
     const r = s.decoder.decode(relay.payload);
     if (!r.ok) {
@@ -79,7 +85,8 @@ export class HandStreams {
     const o = {};
     for (const [id, s] of this.senders) {
       o[id] = { messages: s.messages, bytes: s.bytes, missed: s.missed, errors: s.errors,
-        waiting: s.waiting, superseded: s.superseded, lastError: s.lastError };
+        waiting: s.waiting, superseded: s.superseded, lastError: s.lastError, faces: s.faces,
+        badFaces: s.badFaces };
     }
     return o;
   }

@@ -1,6 +1,7 @@
 // The room client page: joins the room given in the URL as a viewer and draws every rig's hands
 // at its seat around the table, with the connection state, the participants, the render rate and
-// the end-to-end latency (capture stamp -> first render of that frame's mesh).
+// the end-to-end latency (capture stamp -> first render of that frame's mesh). Each rig's
+// user's face, when the rig sends it, shows on a video plane at its seat (thesis 7.5).
 //
 // URL parameters (all optional):
 //   room    room to join (default "tabletop", the CveBridge default)
@@ -101,6 +102,11 @@ worker.onmessage = (ev) => {
     net.rttMs = m.rttMs;
   } else if (m.type === 'senders') {
     net.senders = m.stats;
+  } else if (m.type === 'face') {
+    // Decoded by the browser off the main thread; flipped for WebGL (ImageBitmap ignores flipY).
+    createImageBitmap(new Blob([m.jpeg], { type: 'image/jpeg' }), { imageOrientation: 'flipY' })
+      .then((bitmap) => { if (!scene.updateFace(m.sender, bitmap)) bitmap.close(); })
+      .catch(() => {});
   } else if (m.type === 'hands') {
     const now = nowMs();
     for (const h of m.hands) {
@@ -184,11 +190,12 @@ window.cve = {
       meshMs: meshMs.summary(now),
       participants: net.participants.map((p) => ({
         id: p.id, name: p.name, role: p.role, seat: p.seat, hands: scene.handCount(p.id),
-        ...(net.senders[p.id] || {}),
+        ...(net.senders[p.id] || {}), facesShown: scene.faceCount(p.id),
       })),
     };
   },
   handScreenBoxes: () => scene.handScreenBoxes(),
+  faceScreenBoxes: () => scene.faceScreenBoxes(),
   // Holds (true) or releases the hands; resolves once a frame has been rendered in that state.
   freeze(on) {
     frozen = on;

@@ -100,7 +100,10 @@ export class RoomScene {
         this.room.remove(p.group);
         p.group.traverse((o) => {
           if (o.geometry) o.geometry.dispose();
-          if (o.material) o.material.dispose();
+          if (o.material) {
+            if (o.material.map) o.material.map.dispose();
+            o.material.dispose();
+          }
         });
         this.participants.delete(id);
       }
@@ -118,11 +121,20 @@ export class RoomScene {
       chair.position.set(0, -0.75, -0.3);
       group.add(chair);
       const label = labelSprite(info.name || `participant ${id}`, colour);
-      label.position.set(0, -0.55, 0.45);
+      label.position.set(0, -0.55, 0.68);
       group.add(label);
+      // The face video plane where the user's head is (world y -0.55, 0.45 m above the desk),
+      // facing the table centre (world +y), upright (world +z); hidden until a picture arrives.
+      const face = new THREE.Mesh(new THREE.PlaneGeometry(0.3, 0.3),
+        new THREE.MeshBasicMaterial({ color: '#ffffff', side: THREE.DoubleSide }));
+      face.quaternion.setFromRotationMatrix(new THREE.Matrix4().makeBasis(
+        new THREE.Vector3(-1, 0, 0), new THREE.Vector3(0, 0, 1), new THREE.Vector3(0, 1, 0)));
+      face.position.set(0, -0.55, 0.45);
+      face.visible = false;
+      group.add(face);
       const material = new THREE.MeshStandardMaterial({ color: colour, roughness: 0.55 });
       this.participants.set(id, { group, seat: info.seat, name: info.name, colour, material,
-        hands: new Map() });
+        hands: new Map(), face, faces: 0 });
     }
   }
 
@@ -137,13 +149,38 @@ export class RoomScene {
     if (d.length() < 1e-6) d.set(1, 0, 0); // seats all around: any side will do
     d.normalize();
     this.room.updateMatrixWorld();
-    // The seats' world origins are 0.9 m out and the hands work a little nearer their users:
-    // aim at 1 m, from above the near side of the table.
-    const target = new THREE.Vector3(1.0 * d.x, 1.0 * d.y, 0.05).applyMatrix4(this.room.matrixWorld);
-    const eye = new THREE.Vector3(-0.2 * d.x, -0.2 * d.y, 1.3).applyMatrix4(this.room.matrixWorld);
+    // The seats' world origins are 0.9 m out, the hands work a little nearer their users and
+    // the faces are 0.45 m above the table behind them: aim between, from above the near side.
+    const target = new THREE.Vector3(1.1 * d.x, 1.1 * d.y, 0.2).applyMatrix4(this.room.matrixWorld);
+    const eye = new THREE.Vector3(-0.5 * d.x, -0.5 * d.y, 1.25).applyMatrix4(this.room.matrixWorld);
     this.camera.position.copy(eye);
     this.controls.target.copy(target);
     this.controls.update();
+  }
+
+  // Shows a face picture (ImageBitmap, already flipped for WebGL) on the participant's plane.
+  updateFace(id, bitmap) {
+    const p = this.participants.get(id);
+    if (!p) return false;
+    const old = p.face.material.map;
+    const texture = new THREE.Texture(bitmap);
+    texture.flipY = false;
+    texture.colorSpace = THREE.SRGBColorSpace;
+    texture.needsUpdate = true;
+    p.face.material.map = texture;
+    p.face.material.needsUpdate = true;
+    p.face.visible = true;
+    ++p.faces;
+    if (old) {
+      if (old.image && old.image.close) old.image.close();
+      old.dispose();
+    }
+    return true;
+  }
+
+  faceCount(id) {
+    const p = this.participants.get(id);
+    return p ? p.faces : 0;
   }
 
   participantColour(id) {
@@ -194,29 +231,46 @@ export class RoomScene {
     this.renderer.render(this.scene, this.camera);
   }
 
+  // Screen rectangles (CSS pixels, origin top left) of the visible face planes.
+  faceScreenBoxes() {
+    const boxes = [];
+    this.scene.updateMatrixWorld();
+    for (const [id, p] of this.participants) {
+      if (!p.face.visible) continue;
+      p.face.geometry.computeBoundingBox();
+      boxes.push({ participant: id, ...this.screenBox(p.face.geometry.boundingBox, p.face.matrixWorld) });
+    }
+    return boxes;
+  }
+
+  // The screen rectangle of a box (local coordinates) under a world matrix.
+  screenBox(b, matrixWorld) {
+    const w = this.container.clientWidth;
+    const h = this.container.clientHeight;
+    let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+    const v = new THREE.Vector3();
+    for (let k = 0; k < 8; ++k) {
+      v.set(k & 1 ? b.max.x : b.min.x, k & 2 ? b.max.y : b.min.y, k & 4 ? b.max.z : b.min.z);
+      v.applyMatrix4(matrixWorld).project(this.camera);
+      const sx = (v.x + 1) / 2 * w;
+      const sy = (1 - v.y) / 2 * h;
+      x0 = Math.min(x0, sx); x1 = Math.max(x1, sx);
+      y0 = Math.min(y0, sy); y1 = Math.max(y1, sy);
+    }
+    return { x0, y0, x1, y1 };
+  }
+
   // Screen rectangles (CSS pixels, origin top left) of every hand mesh on the page: where a
   // screenshot must show skin.
   handScreenBoxes() {
     const boxes = [];
-    const w = this.container.clientWidth;
-    const h = this.container.clientHeight;
     this.scene.updateMatrixWorld();
     for (const [id, p] of this.participants) {
       for (const [targetId, hand] of p.hands) {
         const g = hand.mesh.geometry;
         if (!g.attributes.position || g.attributes.position.count === 0) continue;
         g.computeBoundingBox();
-        const b = g.boundingBox;
-        let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
-        const v = new THREE.Vector3();
-        for (let k = 0; k < 8; ++k) {
-          v.set(k & 1 ? b.max.x : b.min.x, k & 2 ? b.max.y : b.min.y, k & 4 ? b.max.z : b.min.z);
-          v.applyMatrix4(hand.mesh.matrixWorld).project(this.camera);
-          const sx = (v.x + 1) / 2 * w;
-          const sy = (1 - v.y) / 2 * h;
-          x0 = Math.min(x0, sx); x1 = Math.max(x1, sx);
-          y0 = Math.min(y0, sy); y1 = Math.max(y1, sy);
-        }
+        const { x0, y0, x1, y1 } = this.screenBox(g.boundingBox, hand.mesh.matrixWorld);
         boxes.push({ participant: id, seat: p.seat, target: targetId, colour: p.colour,
           vertices: g.attributes.position.count, x0, y0, x1, y1 });
       }

@@ -4,6 +4,8 @@
 //   {type:'state', state, detail}   {type:'participants', list, selfId}
 //   {type:'clock', offsetMs, rttMs} {type:'hands', hands: [...]} (typed arrays transferred)
 //   {type:'senders', stats}         (every 500 ms)
+//   {type:'face', sender, jpeg, stampMs} (a participant's face picture; jpeg transferred)
+import { isFaceMessage, parseFaceMessage } from './face_message.js';
 import { HandStreams } from './hand_streams.js';
 import { RoomConnection } from './room_connection.js';
 
@@ -34,6 +36,18 @@ self.onmessage = (ev) => {
     },
     onClock: (offsetMs, rttMs) => postMessage({ type: 'clock', offsetMs, rttMs }),
     onHand: (relay) => {
+      const s = streams.noteSequence(relay);
+      if (isFaceMessage(relay.payload)) {
+        const f = parseFaceMessage(relay.payload);
+        if (!f.ok) {
+          ++s.badFaces;
+          return;
+        }
+        ++s.faces;
+        const jpeg = f.jpeg.slice(); // its own buffer, to transfer
+        postMessage({ type: 'face', sender: relay.sender, jpeg, stampMs: f.stampMs }, [jpeg.buffer]);
+        return;
+      }
       if (!streams.decode(relay) || flushScheduled) return;
       flushScheduled = true;
       setTimeout(flush, 0);

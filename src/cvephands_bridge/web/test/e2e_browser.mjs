@@ -6,6 +6,7 @@
 //
 //   node test/e2e_browser.mjs --url http://127.0.0.1:8765/ [--participants 2] [--hands 2]
 //        [--timeout 90] [--measure 5] [--out DIR] [--chromium /usr/bin/chromium]
+//        [--min-fps 5] [--max-latency 1000] [--faces 1 (0: no face video expected)]
 //
 // Prints one JSON object (the measurements and "failures": [...]) on stdout; exit status 0 when
 // there are no failures, 1 otherwise, 2 when the browser cannot be started.
@@ -15,7 +16,7 @@ import { join } from 'node:path';
 
 function parseArgs(argv) {
   const a = { url: 'http://127.0.0.1:8765/', participants: 2, hands: 2, timeout: 90, measure: 5,
-    out: '', chromium: '/usr/bin/chromium', minFps: 5, maxLatency: 1000 };
+    out: '', chromium: '/usr/bin/chromium', minFps: 5, maxLatency: 1000, faces: 1 };
   for (let i = 2; i < argv.length; i += 2) {
     const key = argv[i].replace(/^--/, '').replace(/-([a-z])/g, (_, c) => c.toUpperCase());
     if (!(key in a) || i + 1 >= argv.length) {
@@ -98,12 +99,14 @@ try {
     // Both hands of every participant at one instant (a hand may be lost for a moment).
     const t1 = Date.now();
     let boxes = [];
+    let faceBoxes = [];
     let shot = null;
     for (;;) {
       // Hold the hands still so that the boxes, the stats and the screenshot show one frame.
       await page.evaluate(() => window.cve.freeze(true));
       stats = await page.evaluate(() => window.cve.stats());
       boxes = await page.evaluate(() => window.cve.handScreenBoxes());
+      faceBoxes = await page.evaluate(() => window.cve.faceScreenBoxes());
       shot = await page.screenshot({ type: 'png' });
       await page.evaluate(() => window.cve.freeze(false));
       if (ready(stats) && boxes.length >= args.participants * args.hands) break;
@@ -125,7 +128,7 @@ try {
       const r = document.getElementById('hud').getBoundingClientRect();
       return { x0: r.left, y0: r.top, x1: r.right, y1: r.bottom };
     });
-    const skin = await page.evaluate(async ({ dataUrl, boxes, hud, isSkinSrc }) => {
+    const skin = await page.evaluate(async ({ dataUrl, boxes, faceBoxes, hud, isSkinSrc }) => {
       const isSkinFn = new Function(`return (${isSkinSrc})`)();
       const img = new Image();
       img.src = dataUrl;
@@ -141,6 +144,23 @@ try {
       // Pixels under the status panel show the panel, not the room.
       const underHud = (x, y) => x >= hud.x0 * scale && x < hud.x1 * scale && y >= hud.y0 * scale &&
         y < hud.y1 * scale;
+      // The face video planes show skin too: counted on their own, not as stray skin.
+      const inFace = new Uint8Array(c.width * c.height);
+      const perFace = faceBoxes.map((b) => {
+        const x0 = Math.max(0, Math.floor(b.x0 * scale)), x1 = Math.min(c.width, Math.ceil(b.x1 * scale));
+        const y0 = Math.max(0, Math.floor(b.y0 * scale)), y1 = Math.min(c.height, Math.ceil(b.y1 * scale));
+        let n = 0, s = 0;
+        for (let y = y0; y < y1; ++y) {
+          for (let x = x0; x < x1; ++x) {
+            const i = y * c.width + x;
+            inFace[i] = 1;
+            if (underHud(x, y)) continue;
+            ++n;
+            if (isSkinFn(px[4 * i], px[4 * i + 1], px[4 * i + 2])) ++s;
+          }
+        }
+        return { ...b, pixels: n, skinFraction: n ? s / n : 0 };
+      });
       const perBox = boxes.map((b) => {
         const x0 = Math.max(0, Math.floor(b.x0 * scale)), x1 = Math.min(c.width, Math.ceil(b.x1 * scale));
         const y0 = Math.max(0, Math.floor(b.y0 * scale)), y1 = Math.min(c.height, Math.ceil(b.y1 * scale));
@@ -161,12 +181,20 @@ try {
       });
       let outside = 0, outsideSkin = 0;
       for (let i = 0; i < c.width * c.height; ++i) {
-        if (inBox[i] || underHud(i % c.width, Math.floor(i / c.width))) continue;
+        if (inBox[i] || inFace[i] || underHud(i % c.width, Math.floor(i / c.width))) continue;
         ++outside;
         if (isSkinFn(px[4 * i], px[4 * i + 1], px[4 * i + 2])) ++outsideSkin;
       }
-      return { perBox, outsideSkinFraction: outside ? outsideSkin / outside : 0 };
-    }, { dataUrl, boxes, hud, isSkinSrc: isSkin.toString() });
+      return { perBox, perFace, outsideSkinFraction: outside ? outsideSkin / outside : 0 };
+    }, { dataUrl, boxes, faceBoxes, hud, isSkinSrc: isSkin.toString() });
+    result.faces = skin.perFace;
+    for (const f of skin.perFace) {
+      // The face fills the middle of its picture (94 % skin there in test_face_video).
+      if (f.pixels > 100 && f.skinFraction < 0.1) {
+        result.failures.push(`participant ${f.participant}: the face plane shows ` +
+          `${(100 * f.skinFraction).toFixed(1)} % skin`);
+      }
+    }
     result.hands = skin.perBox;
     result.outsideSkinFraction = skin.outsideSkinFraction;
     for (const b of skin.perBox) {
@@ -197,6 +225,8 @@ try {
     }
     for (const p of stats.participants.filter((q) => q.role === 'rig')) {
       if (p.errors) result.failures.push(`${p.name}: ${p.errors} undecodable messages (${p.lastError})`);
+      if (args.faces && !(p.facesShown > 0)) result.failures.push(`${p.name}: no face picture shown`);
+      if (p.badFaces) result.failures.push(`${p.name}: ${p.badFaces} malformed face messages`);
     }
   }
 } catch (e) {
