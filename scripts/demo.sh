@@ -118,11 +118,14 @@ fi
 set +e
 LIVE=false
 [ -t 1 ] && LIVE=true
+# Ctrl-C (e.g. with --frames 0) stops roslaunch, which shuts the nodes down; the script and its
+# output filters carry on, so the summaries below still get written.
+trap 'true' INT
 roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" monitor:=true frames:="$FRAMES" \
   output_dir:="$OUT" rviz:="$RVIZ" live_status:="$LIVE" cve:="$CVE" cve_port:="$PORT" \
   "${EXTRA[@]}" 2>&1 |
-  sed -u 's/\x1b\[[0-9;]*m//g; s/\x1b\]2;[^\x07]*\x07//g' |
-  grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()|REQUIRED process|process has finished cleanly|^log file:|Initiating shutdown|killing on exit|shutting down processing monitor|^.{0,8}done.{0,8}$|Loading nodelet|waitForService|Unloading nodelet|Initializing nodelet|Press Ctrl-C|^\.\.\. logging|^.\]2;'
+  (trap '' INT; exec sed -u 's/\x1b\[[0-9;]*m//g; s/\x1b\]2;[^\x07]*\x07//g') |
+  (trap '' INT; exec grep --line-buffered -v -E '^(started roslaunch server|SUMMARY|=======|PARAMETERS|NODES|ROS_MASTER_URI|auto-starting|process\[|setting /run_id|core service|logging to|Checking log|Done checking|\s*$| \* /|  /|    [a-z_]+ \()|REQUIRED process|process has finished cleanly|^log file:|Initiating shutdown|killing on exit|shutting down processing monitor|^.{0,8}done.{0,8}$|Loading nodelet|waitForService|Unloading nodelet|Initializing nodelet|Press Ctrl-C|^\.\.\. logging|^.\]2;')
 rc=${PIPESTATUS[0]}
 if [ -n "$WATCH_PID" ]; then
   kill -INT "$WATCH_PID" 2>/dev/null

@@ -61,10 +61,15 @@ WEB="$ROOT/src/cvephands_bridge/web"
 if [ ! -f "$WEB/node_modules/.package-lock.json" ] ||
    [ "$WEB/package-lock.json" -nt "$WEB/node_modules/.package-lock.json" ]; then
   echo "[setup] installing the browser client's npm packages (npm ci)"
-  (cd "$WEB" && npm ci --no-audit --no-fund --loglevel=error)
+  # Not fatal: without the client the pipeline, the room server (relaying only) and every
+  # other test still work; the browser tests then skip, saying why.
+  (cd "$WEB" && npm ci --no-audit --no-fund --loglevel=error) ||
+    echo "[setup] WARNING: npm ci failed (no npm registry?): the browser client is not built"
 fi
 if [ ! -f "$WEB/dist/app.js" ] || [ -n "$(find "$WEB/src" "$WEB/index.html" "$WEB/style.css" \
      "$WEB/build.mjs" "$WEB/package-lock.json" -newer "$WEB/dist/app.js" 2>/dev/null | head -n 1)" ]; then
-  (cd "$WEB" && node build.mjs)
+  if [ -f "$WEB/node_modules/.package-lock.json" ]; then
+    (cd "$WEB" && node build.mjs) || echo "[setup] WARNING: building the browser client failed"
+  fi
 fi
 echo "[setup] ok"

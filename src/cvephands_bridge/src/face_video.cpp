@@ -59,8 +59,11 @@ bool cropFace(const cv::Mat& rgb, const tabletop_capture::CameraModel& camera,
   const Eigen::Vector3d pc = camera.cameraTWorld() * head;
   Eigen::Vector2d centre;
   if (!camera.projectCamera(pc, &centre)) return false;
-  // Pinhole size of the square at the head's depth (distortion is mild over a head).
+  // Pinhole size of the square at the head's depth (distortion is mild over a head). A head
+  // (estimate) closer to the camera than the square is wide is no face picture: refuse it
+  // rather than allocate a huge canvas.
   const double half = 0.5 * options.head_size * camera.fx / pc.z();
+  if (!(half >= 1.0 && half <= std::max(rgb.cols, rgb.rows))) return false;
   const cv::Rect want(static_cast<int>(std::lround(centre.x() - half)),
                       static_cast<int>(std::lround(centre.y() - half)),
                       static_cast<int>(std::lround(2 * half)), static_cast<int>(std::lround(2 * half)));

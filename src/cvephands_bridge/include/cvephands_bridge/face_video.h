@@ -47,7 +47,8 @@ int pickFaceCamera(const std::vector<tabletop_capture::CameraModel>& cameras,
 
 // The square around the head (head_size at the head's distance), clipped to the image,
 // resized to size x size. rgb: the camera's rgb8 image (CV_8UC3). False (face untouched) when
-// the head is not in front of the camera or the square misses the image.
+// the head is not in front of the camera, the square misses the image, or the square would be
+// under 2 px or wider than the image (a head at the lens).
 bool cropFace(const cv::Mat& rgb, const tabletop_capture::CameraModel& camera,
               const Eigen::Vector3d& head, const FaceVideoOptions& options, cv::Mat* face);
 

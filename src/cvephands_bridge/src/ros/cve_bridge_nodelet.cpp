@@ -209,10 +209,16 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     }
     const cv::Mat rgb(int(im.height), int(im.width), CV_8UC3, const_cast<uint8_t*>(im.data.data()),
                       im.step);
-    cv::Mat face;
-    if (!cropFace(rgb, cams[c], head, face_options_, &face)) return;
-    std::vector<uint8_t> message =
-        encodeFaceMessage(f->header.stamp.sec, f->header.stamp.nsec, face, face_options_.jpeg_quality);
+    std::vector<uint8_t> message;
+    try {  // OpenCV or the encoder may throw (memory, a picture over the size limit)
+      cv::Mat face;
+      if (!cropFace(rgb, cams[c], head, face_options_, &face)) return;
+      message = encodeFaceMessage(f->header.stamp.sec, f->header.stamp.nsec, face,
+                                  face_options_.jpeg_quality);
+    } catch (const std::exception& e) {
+      NODELET_WARN_THROTTLE(10.0, "cve_bridge: face video: picture dropped: %s", e.what());
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     face_bytes_ += message.size();
     bytes_sent_ += message.size();

@@ -116,7 +116,9 @@ int main(int argc, char** argv) {
     SenderStats& s = senders[h.sender];
     if (!s.any) s.first = received;
     s.last = received;
-    if (s.any && h.sequence != s.last_sequence + 1) s.gaps += h.sequence - s.last_sequence - 1;
+    // Forward gaps only (mod 2^32): a repeated or older sequence is no loss.
+    const uint32_t gap = h.sequence - s.last_sequence - 1;
+    if (s.any && gap < 0x80000000u) s.gaps += gap;
     s.any = true;
     s.last_sequence = h.sequence;
     if (cvephands::isFaceMessage(data, size)) {

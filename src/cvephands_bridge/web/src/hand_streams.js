@@ -34,7 +34,9 @@ export class HandStreams {
   // shows what it dropped for us (a slow reader).
   noteSequence(relay) {
     const s = this.sender(relay.sender);
-    if (s.lastSequence >= 0) s.missed += (relay.sequence - s.lastSequence - 1) >>> 0;
+    // Forward gaps only (mod 2^32): a repeated or older sequence is no loss.
+    const gap = (relay.sequence - s.lastSequence - 1) >>> 0;
+    if (s.lastSequence >= 0 && gap < 0x80000000) s.missed += gap;
     s.lastSequence = relay.sequence;
     return s;
   }

@@ -105,7 +105,7 @@ worker.onmessage = (ev) => {
   } else if (m.type === 'face') {
     // Decoded by the browser off the main thread; flipped for WebGL (ImageBitmap ignores flipY).
     createImageBitmap(new Blob([m.jpeg], { type: 'image/jpeg' }), { imageOrientation: 'flipY' })
-      .then((bitmap) => { if (!scene.updateFace(m.sender, bitmap)) bitmap.close(); })
+      .then((bitmap) => { if (!scene.updateFace(m.sender, bitmap, m.stampMs)) bitmap.close(); })
       .catch(() => {});
   } else if (m.type === 'hands') {
     const now = nowMs();

@@ -101,10 +101,13 @@ export class RoomScene {
         p.group.traverse((o) => {
           if (o.geometry) o.geometry.dispose();
           if (o.material) {
-            if (o.material.map) o.material.map.dispose();
+            const map = o.material.map;
+            if (map && map.image && map.image.close) map.image.close();
+            if (map) map.dispose();
             o.material.dispose();
           }
         });
+        p.material.dispose(); // the hands' (shared) material, also when no hand is left
         this.participants.delete(id);
       }
     }
@@ -134,7 +137,7 @@ export class RoomScene {
       group.add(face);
       const material = new THREE.MeshStandardMaterial({ color: colour, roughness: 0.55 });
       this.participants.set(id, { group, seat: info.seat, name: info.name, colour, material,
-        hands: new Map(), face, faces: 0 });
+        hands: new Map(), face, faces: 0, faceStamp: -Infinity });
     }
   }
 
@@ -158,23 +161,26 @@ export class RoomScene {
     this.controls.update();
   }
 
-  // Shows a face picture (ImageBitmap, already flipped for WebGL) on the participant's plane.
-  updateFace(id, bitmap) {
+  // Shows a face picture (ImageBitmap, already flipped for WebGL) on the participant's plane,
+  // unless a newer one is already there (pictures decode concurrently). One texture per
+  // participant; the previous bitmap is released. False: the caller keeps (closes) the bitmap.
+  updateFace(id, bitmap, stampMs) {
     const p = this.participants.get(id);
-    if (!p) return false;
-    const old = p.face.material.map;
-    const texture = new THREE.Texture(bitmap);
-    texture.flipY = false;
-    texture.colorSpace = THREE.SRGBColorSpace;
-    texture.needsUpdate = true;
-    p.face.material.map = texture;
-    p.face.material.needsUpdate = true;
+    if (!p || stampMs < p.faceStamp) return false;
+    p.faceStamp = stampMs;
+    const m = p.face.material;
+    if (m.map) {
+      if (m.map.image && m.map.image.close) m.map.image.close();
+      m.map.image = bitmap;
+    } else {
+      m.map = new THREE.Texture(bitmap);
+      m.map.flipY = false;
+      m.map.colorSpace = THREE.SRGBColorSpace;
+      m.needsUpdate = true;
+    }
+    m.map.needsUpdate = true;
     p.face.visible = true;
     ++p.faces;
-    if (old) {
-      if (old.image && old.image.close) old.image.close();
-      old.dispose();
-    }
     return true;
   }
 

@@ -90,7 +90,7 @@ class ProjectionTable {
 
   ProjectionTable() = default;
   // Validates grid and cameras (throws std::invalid_argument naming the camera and the field:
-  // non-finite or non-positive intrinsics, bad rotation, image side > 4095 px) and builds.
+  // non-finite or non-positive intrinsics, bad rotation, image side > PackedUV::kMaxImageSide = 4080 px) and builds.
   ProjectionTable(const VoxelGrid& grid, const std::vector<tabletop_capture::CameraModel>& cameras,
                   const ProjectionTableOptions& options = ProjectionTableOptions());
 

@@ -42,7 +42,7 @@ class ViewEvidence {
   // Validates and converts one frame set (one image per camera, in the cameras' order).
   // bilinear: also build the quad images (needed by the multi-projection test).
   // Throws std::invalid_argument naming the view and the problem (empty image, not 8-bit,
-  // channel out of range, mask of another size or type, side above 4095 px).
+  // channel out of range, mask of another size or type, side above PackedUV::kMaxImageSide = 4080 px).
   void set(const std::vector<ViewImage>& views, bool bilinear, int threads = 0);
 
   int numViews() const { return static_cast<int>(views_.size()); }

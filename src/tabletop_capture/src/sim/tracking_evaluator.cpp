@@ -44,6 +44,12 @@ void TrackingEvaluator::add(double time, const std::vector<TrackedPoint>& tracke
     const TrackedPoint* track = b.bound ? findTrack(tracked, b.id, hand) : nullptr;
 
     if (!visible) {
+      if (b.bound && b.merged) {
+        // It shared the other hand's target, which goes on tracking that hand: nothing of
+        // this hand's own is left to be reported lost.
+        b.bound = false;
+        b.merged = false;
+      }
       if (was_visible_[t] && b.bound) b.left_at = time;  // waiting for the track to end
       if (b.bound && !track) {
         if (b.left_at >= 0) r.loss_report_delay_s.add(time - b.left_at);
