@@ -148,9 +148,10 @@ class HandMesherNodelet : public nodelet::Nodelet {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     const double rate = rate_.rate(frames_);
+    const bool rejecting = rejections_.grew(rejected_);
     if (frames_ == 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for hand volumes");
-    else if (rejected_ > rejected_at_last_)
+    else if (rejecting)
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting hand volumes (see the log)");
     else
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "meshing %zu hand(s)", last_ids_.size());
@@ -161,7 +162,6 @@ class HandMesherNodelet : public nodelet::Nodelet {
     stat.add("meshing per hand, max (ms)", mesh_ms_.count() ? mesh_ms_.max() : 0.0);
     stat.add("triangles per hand", triangles_.mean());
     stat.add("volumes rejected", rejected_);
-    rejected_at_last_ = rejected_;
   }
 
   std::unique_ptr<MarchingCubes> mc_;
@@ -176,7 +176,8 @@ class HandMesherNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   std::set<uint32_t> last_ids_;
   tabletop_capture::RateMeter rate_;
-  uint64_t frames_ = 0, rejected_ = 0, rejected_at_last_ = 0, meshed_ = 0;
+  tabletop_capture::GrowthMeter rejections_;
+  uint64_t frames_ = 0, rejected_ = 0, meshed_ = 0;
   tabletop_capture::RunningStats mesh_ms_, triangles_;
 };
 

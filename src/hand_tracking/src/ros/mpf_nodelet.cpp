@@ -264,9 +264,10 @@ class MpfNodelet : public nodelet::Nodelet {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     const double rate = rate_.rate(frames_);
+    const bool rejecting = rejections_.grew(rejected_);
     if (frames_ == 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for volumes");
-    else if (rejected_ > rejected_at_last_)
+    else if (rejecting)
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting volumes (see the log)");
     else
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "tracking %d target(s)", active_);
@@ -282,7 +283,6 @@ class MpfNodelet : public nodelet::Nodelet {
     stat.add("splits", splits_);
     stat.add("losses", losses_);
     stat.add("volumes rejected", rejected_);
-    rejected_at_last_ = rejected_;
   }
 
   std::unique_ptr<MpfTracker> tracker_;
@@ -297,7 +297,8 @@ class MpfNodelet : public nodelet::Nodelet {
   psfs::ProbabilityVolume skin_, body_;
   ros::Time last_stamp_;
   tabletop_capture::RateMeter rate_;
-  uint64_t frames_ = 0, rejected_ = 0, rejected_at_last_ = 0;
+  tabletop_capture::GrowthMeter rejections_;
+  uint64_t frames_ = 0, rejected_ = 0;
   uint64_t births_ = 0, merges_ = 0, splits_ = 0, losses_ = 0;
   int active_ = 0;
   tabletop_capture::RunningStats total_ms_, integral_ms_, weights_ms_, reconfigure_ms_;

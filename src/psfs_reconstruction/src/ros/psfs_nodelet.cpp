@@ -314,15 +314,17 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
     std::lock_guard<std::mutex> lock(stats_mutex_);
     const double rate = rate_.rate(reconstructed_);
+    const bool rejecting = rejections_.grew(rejected_);
+    const bool warning = warnings_growth_.grew(warnings_);
     if (processed_ == 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "waiting for frame sets");
     else if (learning_)
       stat.summary(diagnostic_msgs::DiagnosticStatus::OK,
                    "learning the background (" + std::to_string(learned_) + "/" +
                        std::to_string(cfg_.params.background.learning_frames) + ")");
-    else if (rejected_ > rejected_at_last_)
+    else if (rejecting)
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting frame sets: " + last_error_);
-    else if (warnings_ > warnings_at_last_ || cameras_off_ > 0)
+    else if (warning || cameras_off_ > 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "degraded input (see the log)");
     else
       stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "ok");
@@ -339,8 +341,6 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("total (ms)", total_ms_.mean());
     stat.add("total max (ms)", total_ms_.max());
     stat.add("volume", workspaceGrid(cfg_.params.workspace, cfg_.params.dims).describe());
-    rejected_at_last_ = rejected_;
-    warnings_at_last_ = warnings_;
   }
 
   ReconstructorConfig cfg_;
@@ -359,8 +359,8 @@ class PsfsNodelet : public nodelet::Nodelet {
   bool load_tried_ = false, announced_ready_ = false, learning_ = true;
   int learned_ = 0, cameras_off_ = 0;
   uint64_t processed_ = 0, reconstructed_ = 0, rejected_ = 0, warnings_ = 0;
-  uint64_t rejected_at_last_ = 0, warnings_at_last_ = 0;
   tabletop_capture::RateMeter rate_;
+  tabletop_capture::GrowthMeter rejections_, warnings_growth_;
   std::string last_error_;
   std::map<std::string, ros::WallTime> warned_;
   // Per-stage times over the whole run (the demo's summary reads the means).

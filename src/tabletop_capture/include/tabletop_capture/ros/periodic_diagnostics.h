@@ -1,7 +1,8 @@
 // Diagnostics of a nodelet on /diagnostics, published once a second from a wall timer
 // (force_update): the status keeps coming while the nodelet's callbacks stall or no input
 // arrives, which is exactly when someone looks. Plus RateMeter, the per-second rate of a
-// counter between two diagnostics calls. Shared by every nodelet of the workspace.
+// counter between two diagnostics calls, and GrowthMeter, whether a counter grew since the
+// previous call. Shared by every nodelet of the workspace.
 #pragma once
 
 #include <cstdint>
@@ -53,6 +54,20 @@ class RateMeter {
  private:
   ros::WallTime last_;
   uint64_t last_count_ = 0;
+};
+
+// Whether a monotonically increasing counter (e.g. rejected inputs) grew since the previous
+// call (false on the first call for 0).
+class GrowthMeter {
+ public:
+  bool grew(uint64_t count) {
+    const bool g = count > last_;
+    last_ = count;
+    return g;
+  }
+
+ private:
+  uint64_t last_ = 0;
 };
 
 }  // namespace tabletop_capture
