@@ -27,7 +27,7 @@
 #include "cvephands_bridge/face_video.h"
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/room_client.h"
-#include "tabletop_capture/ros/conversions.h"
+#include "tabletop_capture/ros/frame_set_view.h"
 #include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/running_stats.h"
 
@@ -188,31 +188,19 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       head = head_;
       client = client_;
     }
-    const size_t n = f->images.size();
-    if (f->camera_infos.size() != n || f->camera_poses.size() != n || n == 0) return;
-    std::vector<tabletop_capture::CameraModel> cams(n);
-    for (size_t i = 0; i < n; ++i) {
-      std::string why;
-      if (!tabletop_capture::fromCameraInfo(f->camera_infos[i], &cams[i], &why) ||
-          !tabletop_capture::fromTransform(f->camera_poses[i], &cams[i].world_T_camera)) {
-        NODELET_WARN_THROTTLE(10.0, "cve_bridge: face video: bad calibration of camera %zu", i);
-        return;
-      }
+    std::vector<cv::Mat> images;
+    std::vector<tabletop_capture::CameraModel> cams;
+    std::string why;
+    if (!tabletop_capture::unpackFrameSet(*f, &images, &cams, &why)) {
+      NODELET_WARN_THROTTLE(10.0, "cve_bridge: face video: frame set ignored: %s", why.c_str());
+      return;
     }
     const int c = pickFaceCamera(cams, head);
     if (c < 0) return;
-    const sensor_msgs::Image& im = f->images[c];
-    if (im.encoding != "rgb8" || im.step < 3 * im.width ||
-        im.data.size() < size_t(im.step) * im.height) {
-      NODELET_WARN_THROTTLE(10.0, "cve_bridge: face video: camera %d image is not a valid rgb8", c);
-      return;
-    }
-    const cv::Mat rgb(int(im.height), int(im.width), CV_8UC3, const_cast<uint8_t*>(im.data.data()),
-                      im.step);
     std::vector<uint8_t> message;
     try {  // OpenCV or the encoder may throw (memory, a picture over the size limit)
       cv::Mat face;
-      if (!cropFace(rgb, cams[c], head, face_options_, &face)) return;
+      if (!cropFace(images[c], cams[c], head, face_options_, &face)) return;
       message = encodeFaceMessage(f->header.stamp.sec, f->header.stamp.nsec, face,
                                   face_options_.jpeg_quality);
     } catch (const std::exception& e) {
