@@ -97,6 +97,22 @@ void appendParticipantFields(std::string* out, const ParticipantInfo& p, const c
   appendPose(out, p);
 }
 
+// The "id" member of a ping / pong as JSON text ("null" when absent); false when it is there
+// but neither a number nor a string.
+bool pingId(const json::Value& v, std::string* out) {
+  *out = "null";
+  const json::Value* id = v.find("id");
+  if (!id) return true;
+  out->clear();
+  if (id->isNumber())
+    json::appendNumber(out, id->number);
+  else if (id->isString())
+    json::appendString(out, id->string);
+  else
+    return false;
+  return true;
+}
+
 ClientMessage invalid(const char* reason, std::string detail) {
   ClientMessage m;
   m.type = ClientMessage::Type::kInvalid;
@@ -189,16 +205,8 @@ ClientMessage parseClientMessage(std::string_view text) {
     return m;
   }
   if (type->string == "ping") {
-    m.ping_id = "null";
-    if (const json::Value* id = v.find("id")) {
-      m.ping_id.clear();
-      if (id->isNumber())
-        json::appendNumber(&m.ping_id, id->number);
-      else if (id->isString())
-        json::appendString(&m.ping_id, id->string);
-      else
-        return invalid("malformed", "ping \"id\" must be a number or a string");
-    }
+    if (!pingId(v, &m.ping_id))
+      return invalid("malformed", "ping \"id\" must be a number or a string");
     m.type = ClientMessage::Type::kPing;
     return m;
   }
@@ -249,14 +257,7 @@ ServerMessage parseServerMessage(std::string_view text) {
     }
     m.type = ServerMessage::Type::kParticipants;
   } else if (type->string == "pong") {
-    m.ping_id = "null";
-    if (const json::Value* id = v.find("id")) {
-      m.ping_id.clear();
-      if (id->isNumber())
-        json::appendNumber(&m.ping_id, id->number);
-      else if (id->isString())
-        json::appendString(&m.ping_id, id->string);
-    }
+    pingId(v, &m.ping_id);  // an id of another type is left empty (the server never sends one)
     m.type = ServerMessage::Type::kPong;
   } else if (type->string == "error") {
     const json::Value* reason = member(v, "reason", json::Value::Type::kString);

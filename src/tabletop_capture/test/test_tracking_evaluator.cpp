@@ -34,6 +34,14 @@ TrackedPoint track(uint32_t id, bool hand, const Eigen::Vector3d& p, bool active
   return t;
 }
 
+// Frames 10-29 of the fold tests: the hands clasped, the left one 2 cm beside the right.
+bool clasped(int i) { return i >= 10 && i < 30; }
+TruthPoints foldTruth(int i) {
+  TruthPoints tr = truthAt(0.0);
+  if (clasped(i)) tr.position[0] = tr.position[1] + Eigen::Vector3d(-0.02, 0.0, 0.0);
+  return tr;
+}
+
 }  // namespace
 
 TEST(TrackingEvaluator, ConstantOffsetIsTheError) {
@@ -101,12 +109,10 @@ TEST(TrackingEvaluator, FoldedHandsMergeAndSplitWithoutLossOrSwitch) {
   // Frames 10-29 the hands are clasped 2 cm apart and the tracker reports one target (the right
   // hand's id 2); from frame 30 they are apart again and the left hand gets its id 1 back.
   for (int i = 0; i < 50; ++i) {
-    TruthPoints tr = truthAt(0.0);
-    const bool clasped = i >= 10 && i < 30;
-    if (clasped) tr.position[0] = tr.position[1] + Eigen::Vector3d(-0.02, 0.0, 0.0);
+    const TruthPoints tr = foldTruth(i);
     std::vector<TrackedPoint> tracks = {track(2, true, tr.position[1]),
                                         track(3, false, tr.position[2])};
-    if (!clasped) tracks.push_back(track(1, true, tr.position[0]));
+    if (!clasped(i)) tracks.push_back(track(1, true, tr.position[0]));
     ev.add(i * kDt, tracks, tr);
   }
   const auto& left = ev.report(0);
@@ -122,9 +128,7 @@ TEST(TrackingEvaluator, FoldedHandsMergeAndSplitWithoutLossOrSwitch) {
 TEST(TrackingEvaluator, ASplitUnderANewIdIsASwitch) {
   TrackingEvaluator ev;
   for (int i = 0; i < 50; ++i) {
-    TruthPoints tr = truthAt(0.0);
-    const bool clasped = i >= 10 && i < 30;
-    if (clasped) tr.position[0] = tr.position[1] + Eigen::Vector3d(-0.02, 0.0, 0.0);
+    const TruthPoints tr = foldTruth(i);
     std::vector<TrackedPoint> tracks = {track(2, true, tr.position[1]),
                                         track(3, false, tr.position[2])};
     if (i < 10) tracks.push_back(track(1, true, tr.position[0]));
