@@ -43,57 +43,70 @@ void AllClassesFusion::fuse(const ProjectionTable& table, const ViewEvidence& ev
 
   out->grid = table.grid();
   out->data.assign(table.grid().numVoxels(), 0);
-  const int nx = table.grid().dims.x(), nxp = table.paddedRowLength(), chunks = table.chunksPerRow();
+  const int nx = table.grid().dims.x(), nxp = table.paddedRowLength();
   const long long rows = static_cast<long long>(table.grid().numRows());
-  const bool multi = options_.multi_projection;
   const int k = options_.occluded_views;
+  // One row; pairs = the multi-projection median pairs of the row ([c * nxp + x]) or nullptr.
+  auto fuseRow = [&](size_t r, const uint32_t* centres, const int32_t* pairs) {
+    thread_local std::vector<double> sphi, sbeta, scores;
+    sphi.resize(C);
+    sbeta.resize(C);
+    for (int x = 0; x < nx; ++x) {
+      int A = 0;  // observing views
+      for (int c = 0; c < C; ++c) {
+        int b = detail::observeByte(views[c], evidence.likelihood(c), centres[c * nxp + x]);
+        if (b >= 0 && pairs) b = detail::medianPairByte(pairs[size_t(c) * nxp + x]);
+        if (b < 0) continue;
+        // Same reading of a byte as the log terms: 0 is half a step; 255 likewise from above.
+        const double P = b == 0 ? 0.5 / 255.0 : (b == 255 ? 254.5 / 255.0 : b / 255.0);
+        sphi[A] = std::log(P) + lphi;
+        sbeta[A] = std::log(1.0 - P) + lbeta;
+        ++A;
+      }
+      if (A < options_.min_views) continue;
+      // Enumerate all 2^A super classes; bit c set = camera c sees beta.
+      double best = -std::numeric_limits<double>::infinity();
+      int best_mask = 0;
+      double all_max = -std::numeric_limits<double>::infinity();
+      scores.resize(size_t(1) << A);
+      for (uint32_t m = 0; m < (1u << A); ++m) {
+        double s = 0.0;
+        for (int c = 0; c < A; ++c) s += (m >> c & 1u) ? sbeta[c] : sphi[c];
+        scores[m] = s;
+        if (s > best) best = s, best_mask = static_cast<int>(m);
+        all_max = std::max(all_max, s);
+      }
+      bool in = __builtin_popcount(static_cast<unsigned>(best_mask)) <= k;
+      if (in && options_.threshold > 0.0) {
+        double hull = 0.0, all = 0.0;  // log-sum-exp
+        for (uint32_t m = 0; m < (1u << A); ++m) {
+          all += std::exp(scores[m] - all_max);
+          if (__builtin_popcount(m) <= k) hull += std::exp(scores[m] - all_max);
+        }
+        const double log_post = std::log(hull) - std::log(all);
+        in = log_post / A > std::log(options_.threshold);
+      }
+      if (in) out->data[r * nx + x] = 255;
+    }
+  };
+  if (options_.multi_projection) {
+    detail::forEachFaceRow(table, views, options_.threads,
+                           [&](size_t r, const uint32_t* centres, const uint32_t* offsets,
+                               uint16_t* yface, uint16_t* zface) {
+                             thread_local std::vector<int32_t> pairs;
+                             pairs.resize(size_t(C) * nxp);
+                             detail::medianPairsOfRow(views.data(), C, nx, nxp, centres, offsets,
+                                                      yface, zface, pairs.data());
+                             fuseRow(r, centres, pairs.data());
+                           });
+    return;
+  }
 #pragma omp parallel num_threads(resolveThreads(options_.threads))
   {
     std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
-    std::vector<uint32_t> os(table.precomputed() || !multi ? 0 : table.offsetScratchSize());
-    std::vector<double> sphi(C), sbeta(C);
 #pragma omp for schedule(dynamic, 4)
-    for (long long r = 0; r < rows; ++r) {
-      const uint32_t* centres = table.rowCentres(size_t(r), cs.data());
-      const uint32_t* offsets = multi ? table.rowOffsets(size_t(r), os.data()) : nullptr;
-      for (int x = 0; x < nx; ++x) {
-        int A = 0;  // observing views
-        for (int c = 0; c < C; ++c) {
-          const uint32_t* off = multi ? offsets + (c * chunks + x / ProjectionTable::kChunk) * 3 : nullptr;
-          const int b = detail::observeByte(views[c], evidence.likelihood(c), centres[c * nxp + x], off);
-          if (b < 0) continue;
-          // Same reading of a byte as the log terms: 0 is half a step; 255 likewise from above.
-          const double P = b == 0 ? 0.5 / 255.0 : (b == 255 ? 254.5 / 255.0 : b / 255.0);
-          sphi[A] = std::log(P) + lphi;
-          sbeta[A] = std::log(1.0 - P) + lbeta;
-          ++A;
-        }
-        if (A < options_.min_views) continue;
-        // Enumerate all 2^A super classes; bit c set = camera c sees beta.
-        double best = -std::numeric_limits<double>::infinity();
-        int best_mask = 0;
-        double all_max = -std::numeric_limits<double>::infinity();
-        std::vector<double> scores(size_t(1) << A);
-        for (uint32_t m = 0; m < (1u << A); ++m) {
-          double s = 0.0;
-          for (int c = 0; c < A; ++c) s += (m >> c & 1u) ? sbeta[c] : sphi[c];
-          scores[m] = s;
-          if (s > best) best = s, best_mask = static_cast<int>(m);
-          all_max = std::max(all_max, s);
-        }
-        bool in = __builtin_popcount(static_cast<unsigned>(best_mask)) <= k;
-        if (in && options_.threshold > 0.0) {
-          double hull = 0.0, all = 0.0;  // log-sum-exp
-          for (uint32_t m = 0; m < (1u << A); ++m) {
-            all += std::exp(scores[m] - all_max);
-            if (__builtin_popcount(m) <= k) hull += std::exp(scores[m] - all_max);
-          }
-          const double log_post = std::log(hull) - std::log(all);
-          in = log_post / A > std::log(options_.threshold);
-        }
-        if (in) out->data[size_t(r) * nx + x] = 255;
-      }
-    }
+    for (long long r = 0; r < rows; ++r)
+      fuseRow(size_t(r), table.rowCentres(size_t(r), cs.data()), nullptr);
   }
 }
 

@@ -1,10 +1,13 @@
 // Private: input checks and kernel views shared by the fusion variants.
 #pragma once
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "cpu_dispatch.h"
 #include "psfs_kernels.h"
 #include "psfs_reconstruction/projection_table.h"
 #include "psfs_reconstruction/view_evidence.h"
@@ -31,6 +34,53 @@ inline void checkInputs(const ProjectionTable& table, const ViewEvidence& eviden
     throw std::invalid_argument(who + ": multi-projection needs a table built with multi_projection");
   if (multi && !evidence.bilinear())
     throw std::invalid_argument(who + ": multi-projection needs evidence set with bilinear = true");
+}
+
+// Walks the rows of a multi-projection grid in the order the shared face samples need
+// (psfs_kernels.h). The work is split into slabs of consecutive z layers, each walked in
+// memory order (z, then y) by one thread with its own face buffers, so the stored table
+// streams through the caches as one sequence per slab; a slab that does not start at z = 0
+// first samples the +z faces of the layer below it (plusFacesOfRow), so the result does not
+// depend on the split. Slabs are handed out dynamically, about 3 per thread: a thread on a
+// busier core takes fewer (the extra layer per slab costs a third of a layer).
+// fn(row, centres, offsets, yface, zface) with the buffers as the face kernels take them.
+template <class Fn>
+void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>& views,
+                    int threads, const Fn& fn) {
+  const int ny = table.grid().dims.y(), nz = table.grid().dims.z();
+  const int nxp = table.paddedRowLength(), C = table.numCameras();
+  const size_t row_faces = size_t(C) * nxp;
+  const int T = resolveThreads(threads);
+  const int depth = T == 1 ? nz : std::max(2, (nz + 3 * T - 1) / (3 * T));
+  const int slabs = (nz + depth - 1) / depth;
+#pragma omp parallel num_threads(T)
+  {
+    std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
+    std::vector<uint32_t> os(table.precomputed() ? 0 : table.offsetScratchSize());
+    // + 16: the vector kernels read whole vectors past the last camera's row.
+    std::vector<uint16_t> yface(row_faces + 16), zface(row_faces * ny + 16);
+#pragma omp for schedule(dynamic, 1)
+    for (int sl = 0; sl < slabs; ++sl) {
+      const int z0 = sl * depth, z1 = std::min(nz, z0 + depth);
+      if (z0 == 0) {
+        std::fill(zface.begin(), zface.end(), kNoFace);
+      } else {
+        for (int y = 0; y < ny; ++y) {
+          const size_t r = size_t(y) + size_t(ny) * (z0 - 1);
+          plusFacesOfRow(views.data(), C, nxp, table.rowCentres(r, cs.data()),
+                         table.rowOffsets(r, os.data()), 2, &zface[size_t(y) * row_faces]);
+        }
+      }
+      for (int z = z0; z < z1; ++z) {
+        std::fill(yface.begin(), yface.end(), kNoFace);
+        for (int y = 0; y < ny; ++y) {
+          const size_t r = size_t(y) + size_t(ny) * z;
+          fn(r, table.rowCentres(r, cs.data()), table.rowOffsets(r, os.data()), yface.data(),
+             &zface[size_t(y) * row_faces]);
+        }
+      }
+    }
+  }
 }
 
 inline std::vector<KernelView> kernelViews(const ViewEvidence& e) {

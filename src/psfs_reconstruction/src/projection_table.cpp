@@ -337,11 +337,11 @@ void ProjectionTable::sampleOffsets(const Camera& cam, int y, int z, uint32_t* o
     bool ok = true;
     for (int axis = 0; axis < 3 && ok; ++axis) {
       Eigen::Vector3d d = Eigen::Vector3d::Zero();
-      d[axis] = 0.25 * s;
+      d[axis] = 0.25 * s;  // +-1/4 voxel around the chunk's middle: a - b spans half a voxel
       Eigen::Vector2d a, b;
       ok = project(mid + d, &a) && project(mid - d, &b);
       if (!ok) break;
-      const Eigen::Vector2d j = 0.5 * (a - b) * PackedUV::kOne;
+      const Eigen::Vector2d j = (a - b) * PackedUV::kOne;  // centre -> face centre
       const int du = std::clamp(static_cast<int>(std::lround(j.x())), -lim, lim);
       const int dv = std::clamp(static_cast<int>(std::lround(j.y())), -lim, lim);
       packed[axis] = (static_cast<uint32_t>(du) & 0xFFFFu) | (static_cast<uint32_t>(dv) << 16);

@@ -86,24 +86,27 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
   p.exp_scale = kExpScale;
   p.t_byte = thresholdByte(options_.threshold);
   p.zero_outside = options_.zero_outside_hull;
-  const detail::PsfsRowFn row_fn =
-      detail::selectPsfsRow(options_.occluded_views, options_.multi_projection, vectorKernelsActive());
-
   out->grid = table.grid();
   out->data.resize(table.grid().numVoxels());
-  const long long rows = static_cast<long long>(table.grid().numRows());
-  const bool multi = options_.multi_projection;
   uint8_t* dst = out->data.data();
+  const bool vector = vectorKernelsActive();
+  if (options_.multi_projection) {
+    const detail::PsfsFaceRowFn face_fn = detail::selectPsfsFaceRow(options_.occluded_views, vector);
+    detail::forEachFaceRow(table, views, options_.threads,
+                           [&](size_t r, const uint32_t* centres, const uint32_t* offsets,
+                               uint16_t* yface, uint16_t* zface) {
+                             face_fn(p, centres, offsets, yface, zface, dst + r * p.nx);
+                           });
+    return;
+  }
+  const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
+  const long long rows = static_cast<long long>(table.grid().numRows());
 #pragma omp parallel num_threads(resolveThreads(options_.threads))
   {
     std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
-    std::vector<uint32_t> os(table.precomputed() || !multi ? 0 : table.offsetScratchSize());
 #pragma omp for schedule(dynamic, 8)
-    for (long long r = 0; r < rows; ++r) {
-      const uint32_t* centres = table.rowCentres(size_t(r), cs.data());
-      const uint32_t* offsets = multi ? table.rowOffsets(size_t(r), os.data()) : nullptr;
-      row_fn(p, centres, offsets, dst + size_t(r) * p.nx);
-    }
+    for (long long r = 0; r < rows; ++r)
+      row_fn(p, table.rowCentres(size_t(r), cs.data()), dst + size_t(r) * p.nx);
   }
 }
 

@@ -1,5 +1,5 @@
-// Private: the per-row inner loops of foreground-class pSfS, scalar and AVX2. Both do the same
-// integer and float operations in the same order, so they produce identical bytes.
+// Private: the per-row inner loops of foreground-class pSfS, scalar, AVX2 and AVX-512. All do
+// the same integer and float operations in the same order, so they produce identical bytes.
 #pragma once
 
 #include <cstdint>
@@ -30,21 +30,50 @@ struct PsfsRowParams {
   bool zero_outside = false;
 };
 
-// centres: ProjectionTable::rowCentres; offsets: rowOffsets or nullptr (single projection).
-using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, const uint32_t* offsets,
-                           uint8_t* out);
+// Single projection. centres: ProjectionTable::rowCentres.
+using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, uint8_t* out);
 
 // k = occlusion tolerance (0..4). Returns the AVX2 kernel when `vector` (caller checked the CPU).
-PsfsRowFn selectPsfsRow(int k, bool multi, bool vector);
+PsfsRowFn selectPsfsRow(int k, bool vector);
 
 constexpr int kMaxOccludedViews = 4;
 
-// Shared by the reference variants: the camera's observation of a voxel as a likelihood byte,
-// nearest pixel or median of the 6 bilinear samples. Returns -1 if the camera gives no evidence.
-int observeByte(const KernelView& view, const uint8_t* likelihood, uint32_t centre,
-                const uint32_t* chunk_offsets /* 3 entries or nullptr */);
-// Median-of-6 bilinear sample (0..255) as the kernels compute it.
-int medianSampleByte(const KernelView& view, uint32_t centre, const uint32_t* chunk_offsets);
+// ---- multi-projection: shared face samples ------------------------------------------------
+// A voxel's 6 samples are its face centres (ProjectionTable::rowOffsets: centre +- half a voxel
+// per axis), bilinear samples of the likelihood, 0 .. 255 * 256. The face between voxels A
+// (lower) and B (upper) along an axis is one sample: at A's centre + A's offset when the camera
+// observes A, else at B's centre - B's offset. Every kernel follows this rule, so each face is
+// computed once and all kernels give the same bytes.
+//
+// Rows are walked in z-then-y order inside a band of rows along y, carrying faces:
+//  * x faces inside the row (the kernel's own carry);
+//  * yface[c * nxp + x]: +y faces of the previous row of this layer (in), this row's (out);
+//  * zface[c * nxp + x]: +z faces of this row in the previous layer (in), this layer's (out).
+// kNoFace in a buffer (the value of a face whose lower voxel is missing or unobserved) makes
+// the kernel sample the face from the upper voxel.
+constexpr uint16_t kNoFace = 0xFFFF;
+using PsfsFaceRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres,
+                               const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
+                               uint8_t* out);
+PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector);
+
+// The + faces along `axis` (1 = y, 2 = z) of one row, all cameras, into faces[c * nxp + x]:
+// what a walk that starts in the middle of the grid needs from the row below its first one.
+void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
+                    const uint32_t* offsets, int axis, uint16_t* faces);
+
+// Reference variants: per camera and voxel of one row, the sum of the two middle face samples
+// (0 .. 2 * 255 * 256; pairs[c * nxp + x]; unobserved voxels get an unspecified value), with
+// the same buffers and walk as the kernels.
+void medianPairsOfRow(const KernelView* views, int num_cameras, int nx, int nxp,
+                      const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
+                      uint16_t* zface, int32_t* pairs);
+// A median pair as a likelihood byte (0..255), rounded like the kernels' log term sees it.
+inline int medianPairByte(int32_t pair) { return (pair + 256) >> 9; }
+
+// Single projection, reference variants: the camera's nearest-pixel likelihood byte, or -1 if
+// it gives no evidence (not observed, or the pixel is switched off).
+int observeByte(const KernelView& view, const uint8_t* likelihood, uint32_t centre);
 
 }  // namespace detail
 }  // namespace psfs

@@ -2,12 +2,15 @@
 // synthetic cameras with exact silhouettes, where the visual hull is known in closed form.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include <cmath>
 #include <cstdio>
 #include <limits>
 
+#include "../src/fusion_common.h"  // private: the face walk, checked against a brute force below
+#include "../src/psfs_kernels.h"
 #include "fusion_test_utils.h"
 #include "psfs_reconstruction/all_classes_fusion.h"
 #include "psfs_reconstruction/binary_sfs.h"
@@ -22,6 +25,10 @@ using tabletop_capture::CameraModel;
 using test::Sphere;
 
 constexpr uint8_t kIn = 230, kOut = 25;
+// Distance (voxels) from a cone within which a multi-projection voxel may go either way: the
+// face samples sit at +-1/2 voxel, and the median follows the centre once two axes' pairs are
+// on its side, i.e. beyond 1/2 * sqrt(1/2) voxel.
+constexpr double kFaceBand = 0.36;
 
 // The threshold that separates "all views agree" from "one view disagrees" with these
 // likelihood levels and C views: geometric middle of the two normalised posteriors.
@@ -274,9 +281,11 @@ TEST(PsfsFusion, MultiProjectionOnDefaultRigAt16mm) {
   o.threshold = separatingThreshold(8);
   o.multi_projection = true;
   const ProbabilityVolume vol = fusePsfs(grid, rig.cameras, test::toViews(images), o);
-  // Median of samples at +-1/4 voxel: boundary voxels can go either way within a quarter
-  // voxel of a cone, plus the pixel quantisation (distortion: ~1 px in angle).
-  const auto hull = test::analyticHull(grid, rig.cameras, spheres, 1.0, grid.voxel_size / 4);
+  // Median of the 6 face samples (+-1/2 voxel per axis): a voxel follows its centre once at
+  // least two axes' sample pairs lie on the centre's side of the cone, i.e. once the centre is
+  // farther than 1/2 * sqrt(1/2) = 0.354 voxel from it; plus the pixel quantisation
+  // (distortion: ~1 px in angle).
+  const auto hull = test::analyticHull(grid, rig.cameras, spheres, 1.0, kFaceBand * grid.voxel_size);
   const Comparison c = compare(vol, thresholdByte(o.threshold), hull);
   o.multi_projection = false;
   const ProbabilityVolume single = fusePsfs(grid, rig.cameras, test::toViews(images), o);
@@ -352,6 +361,29 @@ TEST(PsfsFusion, AllClassesAndForegroundClassAgreeOnCleanData) {
   EXPECT_GT(in, 1000u);
   EXPECT_EQ(differ, 0u);
   EXPECT_EQ(differ_bin, 0u);
+
+  // Multi-projection: the all-classes variant reads the same shared face samples (as bytes).
+  // Bilinear samples at the silhouette edges take values between the two levels, where the
+  // two decision rules may differ, so both are held to the analytic hull instead.
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const VoxelGrid coarse = sphereGrid(20);  // 15 mm voxels: the resolution the test is for
+  ProjectionTable mtable(coarse, s.cams, to);
+  ev.set(test::toViews(s.images), true);
+  o.multi_projection = true;
+  AllClassesOptions ao;
+  ao.multi_projection = true;
+  PsfsFusion(o).fuse(mtable, ev, &fg);
+  AllClassesFusion(ao).fuse(mtable, ev, &all);
+  const auto hull = test::analyticHull(coarse, s.cams, s.spheres, 0.75, kFaceBand * coarse.voxel_size);
+  const Comparison cf = compare(fg, thresholdByte(o.threshold), hull), ca = compare(all, 0, hull);
+  std::printf("multi-projection, %s: IoU vs analytic hull: foreground-class %.4f, all-classes "
+              "%.4f (mismatches outside the band: %zu, %zu)\n",
+              coarse.describe().c_str(), cf.iou, ca.iou, cf.certain_mismatches, ca.certain_mismatches);
+  EXPECT_EQ(cf.certain_mismatches, 0u);
+  EXPECT_EQ(ca.certain_mismatches, 0u);
+  EXPECT_GT(cf.iou, 0.85);
+  EXPECT_GT(ca.iou, 0.85);
 }
 
 TEST(PsfsFusion, OneBlankedViewIsToleratedWithK1) {
@@ -559,6 +591,11 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
     }
     views.push_back(v);
   }
+  // Camera 1 zoomed in: it sees only part of the grid, so rows, columns and layers switch
+  // between observed and unobserved voxels (the face kernels' fallbacks).
+  auto cams = rig.cameras;
+  cams[1].fx *= 2.5;
+  cams[1].fy *= 2.5;
   for (bool multi : {false, true})
     for (int k : {0, 1, 2, 4}) {
       PsfsOptions o;
@@ -566,7 +603,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
       o.occluded_views = k;
       ProjectionTableOptions to;
       to.multi_projection = multi;
-      ProjectionTable table(referenceGrid(Resolution::k16mm), rig.cameras, to);
+      ProjectionTable table(referenceGrid(Resolution::k16mm), cams, to);
       ViewEvidence ev;
       ev.set(views, multi);
       ProbabilityVolume vec, sca, vec2;
@@ -580,7 +617,99 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
       ASSERT_EQ(vec.data, sca.data) << "multi " << multi << " k " << k
                                     << (avx512KernelsActive() ? " (AVX-512)" : " (AVX2)");
       ASSERT_EQ(vec2.data, sca.data) << "multi " << multi << " k " << k << " (AVX2)";
+      // Each thread walks its own range of layers: the split must not show in the bytes.
+      for (int threads : {1, 3, 5}) {
+        o.threads = threads;
+        ProbabilityVolume t;
+        PsfsFusion(o).fuse(table, ev, &t);
+        ASSERT_EQ(t.data, vec.data) << "multi " << multi << " k " << k << ", " << threads << " threads";
+      }
     }
+}
+
+// The shared face samples follow the rule of psfs_kernels.h whatever the walk: a brute force
+// per voxel (each face from the table and the likelihood bytes directly) against the walk the
+// reference variants use, on a rig where one camera sees only part of the grid.
+TEST(PsfsFusion, FaceSamplesFollowTheSharingRule) {
+  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  auto cams = rig.cameras;
+  cams[1].fx *= 2.5;
+  cams[1].fy *= 2.5;
+  const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2}};
+  std::vector<ViewImage> views;
+  std::vector<cv::Mat> images;
+  for (size_t c = 0; c < cams.size(); ++c) {
+    images.push_back(test::noisy(test::sphereLikelihood(cams[c], spheres), 40, 0.05, 31 + c));
+    views.push_back(ViewImage{images.back(), 0, cv::Mat()});
+  }
+  const VoxelGrid grid = cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 20);  // 20^3, 30 mm
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(grid, cams, to);
+  ViewEvidence ev;
+  ev.set(views, true);
+  const std::vector<detail::KernelView> kv = detail::kernelViews(ev);
+  const int C = table.numCameras(), nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  const int nxp = table.paddedRowLength(), chunks = table.chunksPerRow();
+
+  // Bilinear sample of camera c at packed centre uv + sign * packed offset, straight from the
+  // bytes with clamped coordinates (1/16 px weights).
+  auto sample = [&](int c, uint32_t uv, uint32_t off, int sign) {
+    const int U = int(uv & 0xFFFF) + sign * int(int16_t(off & 0xFFFF)) - 8;  // 16 * (u - pixel 0)
+    const int V = int(uv >> 16) + sign * (int32_t(off) >> 16) - 8;
+    const int u0 = U >> 4, v0 = V >> 4, fu = U & 15, fv = V & 15;  // floor for negatives too
+    auto at = [&](int u, int v) {
+      return int(images[c].at<uint8_t>(std::clamp(v, 0, images[c].rows - 1), std::clamp(u, 0, images[c].cols - 1)));
+    };
+    return (at(u0, v0) * (16 - fv) + at(u0, v0 + 1) * fv) * (16 - fu) +
+           (at(u0 + 1, v0) * (16 - fv) + at(u0 + 1, v0 + 1) * fv) * fu;
+  };
+  std::vector<uint32_t> scratch(table.offsetScratchSize());
+  auto offset = [&](int c, int x, int y, int z, int axis) {
+    return table.rowOffsets(size_t(y) + size_t(ny) * z, scratch.data())[(c * chunks + x / ProjectionTable::kChunk) * 3 + axis];
+  };
+  size_t checked = 0, unobserved = 0, fallbacks = 0;
+  std::vector<int32_t> walk(grid.numVoxels() * C);
+  for (int threads : {1, 2, 3}) {
+    detail::forEachFaceRow(table, kv, threads, [&](size_t r, const uint32_t* centres, const uint32_t* offsets,
+                                                   uint16_t* yface, uint16_t* zface) {
+      std::vector<int32_t> pairs(size_t(C) * nxp);
+      detail::medianPairsOfRow(kv.data(), C, nx, nxp, centres, offsets, yface, zface, pairs.data());
+      for (int c = 0; c < C; ++c)
+        for (int x = 0; x < nx; ++x) walk[(r * nx + x) * C + c] = pairs[size_t(c) * nxp + x];
+    });
+    for (int z = 0; z < nz; ++z)
+      for (int y = 0; y < ny; ++y)
+        for (int x = 0; x < nx; ++x)
+          for (int c = 0; c < C; ++c) {
+            const uint32_t no = PackedUV::notObserved(cams[c].height);
+            const uint32_t p = table.centre(c, x, y, z);
+            if (p == no) {
+              ++unobserved;
+              continue;
+            }
+            const int lower[3][3] = {{x - 1, y, z}, {x, y - 1, z}, {x, y, z - 1}};
+            int32_t f[6];
+            for (int a = 0; a < 3; ++a) {
+              f[2 * a + 1] = sample(c, p, offset(c, x, y, z, a), 1);
+              const int* l = lower[a];
+              const bool has = l[0] >= 0 && l[1] >= 0 && l[2] >= 0;
+              const uint32_t q = has ? table.centre(c, l[0], l[1], l[2]) : no;
+              fallbacks += has && q == no;
+              f[2 * a] = q != no ? sample(c, q, offset(c, l[0], l[1], l[2], a), 1)
+                                 : sample(c, p, offset(c, x, y, z, a), -1);
+            }
+            std::sort(f, f + 6);
+            ASSERT_EQ(walk[(grid.index(x, y, z)) * C + c], f[2] + f[3])
+                << "voxel (" << x << ", " << y << ", " << z << ") camera " << c << ", " << threads << " threads";
+            ++checked;
+          }
+  }
+  std::printf("face samples: %zu voxel-camera medians match the brute force (%zu unobserved, %zu "
+              "faces sampled from the upper voxel because the lower one is unobserved)\n",
+              checked, unobserved, fallbacks);
+  EXPECT_GT(unobserved, 0u);
+  EXPECT_GT(fallbacks, 0u);
 }
 
 // The AVX-512 and AVX2 row projections do the same float operations per lane: their tables
@@ -638,7 +767,7 @@ TEST(PsfsFusion, NoisyLikelihoodsBeatBinarySfs) {
   for (Resolution r : {Resolution::k16mm, Resolution::k8mm}) {
     const VoxelGrid grid = referenceGrid(r);
     const bool multi = r == Resolution::k16mm;
-    const auto hull = test::analyticHull(grid, rig.cameras, spheres, 1.0, multi ? grid.voxel_size / 4 : 0.0);
+    const auto hull = test::analyticHull(grid, rig.cameras, spheres, 1.0, multi ? kFaceBand * grid.voxel_size : 0.0);
     ProjectionTableOptions to;
     to.multi_projection = multi;
     ProjectionTable table(grid, rig.cameras, to);

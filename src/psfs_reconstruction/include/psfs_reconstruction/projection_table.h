@@ -8,10 +8,14 @@
 //
 // Per voxel and camera the table holds the voxel centre's image position, packed (see PackedUV).
 // For the multi-projection test it also holds, per camera and per chunk of 8 voxels along x
-// (one SIMD vector), the image displacement of the sample points at +-1/4 voxel along x, y and z
-// (the 6 samples are centre +- these). Over 8 voxels the local Jacobian of the projection
-// changes by a few percent of a pixel-sized offset, so one set per chunk costs nothing in
-// accuracy and 1.5 bytes per voxel and camera instead of 24.
+// (one SIMD vector), the image displacement of half a voxel along x, y and z: the 6 samples of
+// a voxel are its 6 face centres, centre +- these. Over 8 voxels the local Jacobian of the
+// projection changes by a few percent of a pixel-sized offset, so one set per chunk costs
+// nothing in accuracy and 1.5 bytes per voxel and camera instead of 24.
+//
+// Face samples are shared: the face between voxels A (lower) and B (upper) along an axis is
+// sampled once, at A's centre + A's offset when camera c observes A, else at B's centre - B's
+// offset (see psfs_kernels.h). So a voxel costs 3 bilinear lookups per camera, not 6.
 #pragma once
 
 #include <cstdint>
@@ -83,8 +87,8 @@ struct ProjectionTableOptions {
 
 class ProjectionTable {
  public:
-  // Largest sample offset the multi-projection test uses (pixels). Voxels bigger than ~8 pixels
-  // would need more than 6 samples anyway; the offsets are clamped to this.
+  // Largest sample offset the multi-projection test uses (pixels): half a voxel. Voxels bigger
+  // than ~14 pixels would need more than 6 samples anyway; the offsets are clamped to this.
   static constexpr int kMaxSampleOffsetPx = 7;
   static constexpr int kChunk = 8;  // voxels per chunk along x (one AVX2 vector of int32)
 
@@ -119,7 +123,8 @@ class ProjectionTable {
   // `scratch` (centreScratchSize() entries) and returns it.
   const uint32_t* rowCentres(size_t row, uint32_t* scratch) const;
   // Sample offsets (multi-projection tables only): [(c * chunksPerRow() + chunk) * 3 + axis],
-  // each int16 du (low) and dv (high) in 1/16 pixel, the displacement of +1/4 voxel along axis.
+  // each int16 du (low) and dv (high) in 1/16 pixel, the displacement of +1/2 voxel along axis
+  // (voxel centre to face centre), clamped to kMaxSampleOffsetPx.
   const uint32_t* rowOffsets(size_t row, uint32_t* scratch) const;
 
   // Scalar access for tests and reference code: packed centre of voxel (x, y, z) in camera c.
