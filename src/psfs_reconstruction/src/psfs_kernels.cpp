@@ -397,34 +397,29 @@ __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, con
 // same integer and float operations lane by lane, so the same bytes. Masks replace blends.
 #define PSFS_AVX512 __attribute__((target("avx512f,avx512bw,avx2,fma"), always_inline)) inline
 
-// Bilinear sample at the padded fixed-point position packed as 16-bit (u | v << 16) per lane,
-// the same integers as bilinear() (all positions lie in [0, 65535]: PackedUV::kMaxImageSide).
-// Packed 16-bit arithmetic replaces the split/multiply/add of the index and the weights:
-// idx = u0 + v0 * stride in one madd, the weight bytes and words from byte shuffles.
+// Bilinear sample at the padded fixed-point position s, packed as 16-bit (u | v << 16) per
+// lane: the same integers as bilinear() (all positions lie in [0, 65535]:
+// PackedUV::kMaxImageSide). Packed 16-bit arithmetic replaces the split/multiply/add of the
+// index (u0 + v0 * stride in one madd), and the weights come from 16-entry tables.
 PSFS_AVX512 __m512i quadIndex512(const KernelView& v, __m512i s) {
   return _mm512_madd_epi16(_mm512_srli_epi16(s, 4), _mm512_set1_epi32(1 | (v.quad_stride << 16)));
 }
 
 PSFS_AVX512 __m512i lerp512(__m512i q, __m512i s) {
-  const __m512i f = _mm512_and_si512(s, _mm512_set1_epi32(0x000F000F));  // fu | fv << 16
-  // Vertical weights, bytes (16 - fv, fv, 16 - fv, fv): fv (byte 2) into every byte, then
-  // 16 - fv in the even ones.
-  const __m512i fv4 = _mm512_shuffle_epi8(
-      f, _mm512_set4_epi32(0x0E0E0E0E, 0x0A0A0A0A, 0x06060606, 0x02020202));
-  const __m512i wv = _mm512_mask_sub_epi8(fv4, __mmask64(0x5555555555555555ull),
-                                          _mm512_set1_epi8(16), fv4);
-  const __m512i lr = _mm512_maddubs_epi16(q, wv);
-  // Horizontal weights, words (16 - fu, fu): fu (byte 0) into both words, then 16 - fu below.
-  const __m512i fu2 = _mm512_shuffle_epi8(
-      f, _mm512_set4_epi32(int(0x800C800Cu), int(0x80088008u), int(0x80048004u), int(0x80008000u)));
-  const __m512i wu = _mm512_mask_sub_epi16(fu2, __mmask32(0x55555555u), _mm512_set1_epi16(16), fu2);
-  return _mm512_madd_epi16(lr, wu);
+  // vpermd reads only the low 4 bits of each index lane: fu is bits 0-3 of s, fv bits 16-19.
+  // Vertical weights, bytes (16 - fv, fv, 16 - fv, fv): one maddubs gives the left and right
+  // column lerps; horizontal weights, words (16 - fu, fu): one madd the horizontal lerp.
+  const __m512i wv_table = _mm512_setr_epi32(
+      0x00100010, 0x010F010F, 0x020E020E, 0x030D030D, 0x040C040C, 0x050B050B, 0x060A060A, 0x07090709,
+      0x08080808, 0x09070907, 0x0A060A06, 0x0B050B05, 0x0C040C04, 0x0D030D03, 0x0E020E02, 0x0F010F01);
+  const __m512i wu_table = _mm512_setr_epi32(
+      0x00000010, 0x0001000F, 0x0002000E, 0x0003000D, 0x0004000C, 0x0005000B, 0x0006000A, 0x00070009,
+      0x00080008, 0x00090007, 0x000A0006, 0x000B0005, 0x000C0004, 0x000D0003, 0x000E0002, 0x000F0001);
+  const __m512i wv = _mm512_permutexvar_epi32(_mm512_srli_epi32(s, 16), wv_table);
+  const __m512i wu = _mm512_permutexvar_epi32(s, wu_table);
+  return _mm512_madd_epi16(_mm512_maddubs_epi16(q, wv), wu);
 }
 
-// Bilinear sample at the padded fixed-point position packed as 16-bit (u | v << 16) per lane,
-// the same integers as bilinear() (all positions lie in [0, 65535]: PackedUV::kMaxImageSide).
-// Packed 16-bit arithmetic replaces the split/multiply/add of the index and the weights:
-// idx = u0 + v0 * stride in one madd, the weight bytes and words from byte shuffles.
 PSFS_AVX512 __m512i bilinear512(const KernelView& v, __m512i s) {
   return lerp512(_mm512_i32gather_epi32(quadIndex512(v, s), v.pairs, 2), s);
 }
