@@ -95,7 +95,7 @@ void AllClassesFusion::fuse(const ProjectionTable& table, const ViewEvidence& ev
                                uint16_t* yface, uint16_t* zface) {
                              thread_local std::vector<int32_t> pairs;
                              pairs.resize(size_t(C) * nxp);
-                             detail::medianPairsOfRow(views.data(), C, nx, nxp, centres, offsets,
+                             detail::medianPairsOfRow(views.data(), C, nxp, centres, offsets,
                                                       yface, zface, pairs.data());
                              fuseRow(r, centres, pairs.data());
                            });

@@ -42,7 +42,9 @@ inline void checkInputs(const ProjectionTable& table, const ViewEvidence& eviden
 // streams through the caches as one sequence per slab; a slab that does not start at z = 0
 // first samples the +z faces of the layer below it (plusFacesOfRow), so the result does not
 // depend on the split. Slabs are handed out dynamically, about 3 per thread: a thread on a
-// busier core takes fewer (the extra layer per slab costs a third of a layer).
+// busier core takes fewer (the extra layer per slab costs a third of a layer's lookups, plus
+// its projections for a table projected on the fly). Slabs are at least 2 layers deep, so a
+// grid of nz layers uses at most nz / 2 threads.
 // fn(row, centres, offsets, yface, zface) with the buffers as the face kernels take them.
 template <class Fn>
 void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>& views,

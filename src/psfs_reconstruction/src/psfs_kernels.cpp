@@ -19,6 +19,10 @@ namespace detail {
 namespace {
 
 constexpr int kPad16 = ViewEvidence::kQuadPad * PackedUV::kOne - PackedUV::kOne / 2;  // 16P - 8
+// Memory bound, not only accuracy: a sample at the largest offset from the not-observed marker
+// (u = 0) or from the image border must stay inside the pair image's replicated border.
+static_assert(ProjectionTable::kMaxSampleOffsetPx * PackedUV::kOne <= kPad16,
+              "sample offsets must stay within the pair images' border");
 constexpr int32_t kNoEv = ViewEvidence::kNoEvidence;
 
 // ---------------------------------------------------------------------------- scalar -------
@@ -687,10 +691,9 @@ void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uin
     }
 }
 
-void medianPairsOfRow(const KernelView* views, int num_cameras, int nx, int nxp,
+void medianPairsOfRow(const KernelView* views, int num_cameras, int nxp,
                       const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
                       uint16_t* zface, int32_t* pairs) {
-  (void)nx;
   const int chunks = nxp / ProjectionTable::kChunk;
   for (int c = 0; c < num_cameras; ++c)
     facePairsScalar(views[c], nxp, centres + c * nxp, offsets + c * chunks * 3, yface + c * nxp,

@@ -41,17 +41,21 @@ constexpr int kMaxOccludedViews = 4;
 // ---- multi-projection: shared face samples ------------------------------------------------
 // A voxel's 6 samples are its face centres (ProjectionTable::rowOffsets: centre +- half a voxel
 // per axis), bilinear samples of the likelihood, 0 .. 255 * 256. The face between voxels A
-// (lower) and B (upper) along an axis is one sample: at A's centre + A's offset when the camera
-// observes A, else at B's centre - B's offset. Every kernel follows this rule, so each face is
-// computed once and all kernels give the same bytes.
+// (lower) and B (upper) along an axis is one sample: at A's centre + A's offset when A's centre
+// projects into camera c's image (whether or not its pixel is switched off), else at B's
+// centre - B's offset. Every kernel follows this rule, so each face is computed once and all
+// kernels give the same bytes.
 //
-// Rows are walked in z-then-y order inside a band of rows along y, carrying faces:
+// Rows are walked in z-then-y order through a slab of consecutive z layers (forEachFaceRow in
+// fusion_common.h), carrying faces:
 //  * x faces inside the row (the kernel's own carry);
 //  * yface[c * nxp + x]: +y faces of the previous row of this layer (in), this row's (out);
 //  * zface[c * nxp + x]: +z faces of this row in the previous layer (in), this layer's (out).
+// Both buffers must be readable 16 entries past num_cameras * nxp (whole-vector loads).
 // kNoFace in a buffer (the value of a face whose lower voxel is missing or unobserved) makes
 // the kernel sample the face from the upper voxel.
 constexpr uint16_t kNoFace = 0xFFFF;
+static_assert(255 * 256 < kNoFace, "a face sample must never read as the kNoFace marker");
 using PsfsFaceRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres,
                                const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
                                uint8_t* out);
@@ -65,7 +69,7 @@ void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uin
 // Reference variants: per camera and voxel of one row, the sum of the two middle face samples
 // (0 .. 2 * 255 * 256; pairs[c * nxp + x]; unobserved voxels get an unspecified value), with
 // the same buffers and walk as the kernels.
-void medianPairsOfRow(const KernelView* views, int num_cameras, int nx, int nxp,
+void medianPairsOfRow(const KernelView* views, int num_cameras, int nxp,
                       const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
                       uint16_t* zface, int32_t* pairs);
 // A median pair as a likelihood byte (0..255), rounded like the kernels' log term sees it.

@@ -596,6 +596,11 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
   auto cams = rig.cameras;
   cams[1].fx *= 2.5;
   cams[1].fy *= 2.5;
+  // The reference grid, and one 37 voxels wide: rows padded to 40, so the AVX-512 kernel's
+  // last step per row has a single chunk of 8 (5 voxels and 3 of padding).
+  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm),
+                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
+  for (const VoxelGrid& grid : grids)
   for (bool multi : {false, true})
     for (int k : {0, 1, 2, 4}) {
       PsfsOptions o;
@@ -603,7 +608,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
       o.occluded_views = k;
       ProjectionTableOptions to;
       to.multi_projection = multi;
-      ProjectionTable table(referenceGrid(Resolution::k16mm), cams, to);
+      ProjectionTable table(grid, cams, to);
       ViewEvidence ev;
       ev.set(views, multi);
       ProbabilityVolume vec, sca, vec2;
@@ -614,15 +619,16 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
       forceScalarKernels(true);
       PsfsFusion(o).fuse(table, ev, &sca);
       forceScalarKernels(false);
-      ASSERT_EQ(vec.data, sca.data) << "multi " << multi << " k " << k
+      ASSERT_EQ(vec.data, sca.data) << grid.describe() << " multi " << multi << " k " << k
                                     << (avx512KernelsActive() ? " (AVX-512)" : " (AVX2)");
-      ASSERT_EQ(vec2.data, sca.data) << "multi " << multi << " k " << k << " (AVX2)";
+      ASSERT_EQ(vec2.data, sca.data) << grid.describe() << " multi " << multi << " k " << k << " (AVX2)";
       // Each thread walks its own range of layers: the split must not show in the bytes.
       for (int threads : {1, 3, 5}) {
         o.threads = threads;
         ProbabilityVolume t;
         PsfsFusion(o).fuse(table, ev, &t);
-        ASSERT_EQ(t.data, vec.data) << "multi " << multi << " k " << k << ", " << threads << " threads";
+        ASSERT_EQ(t.data, vec.data) << grid.describe() << " multi " << multi << " k " << k << ", "
+                                    << threads << " threads";
       }
     }
 }
@@ -642,6 +648,9 @@ TEST(PsfsFusion, FaceSamplesFollowTheSharingRule) {
     images.push_back(test::noisy(test::sphereLikelihood(cams[c], spheres), 40, 0.05, 31 + c));
     views.push_back(ViewImage{images.back(), 0, cv::Mat()});
   }
+  // A switched-off patch: it takes evidence away, but which samples a face uses must not change.
+  views[2].active = cv::Mat(240, 320, CV_8UC1, cv::Scalar(1));
+  views[2].active(cv::Rect(100, 50, 80, 120)).setTo(0);
   const VoxelGrid grid = cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 20);  // 20^3, 30 mm
   ProjectionTableOptions to;
   to.multi_projection = true;
@@ -674,7 +683,7 @@ TEST(PsfsFusion, FaceSamplesFollowTheSharingRule) {
     detail::forEachFaceRow(table, kv, threads, [&](size_t r, const uint32_t* centres, const uint32_t* offsets,
                                                    uint16_t* yface, uint16_t* zface) {
       std::vector<int32_t> pairs(size_t(C) * nxp);
-      detail::medianPairsOfRow(kv.data(), C, nx, nxp, centres, offsets, yface, zface, pairs.data());
+      detail::medianPairsOfRow(kv.data(), C, nxp, centres, offsets, yface, zface, pairs.data());
       for (int c = 0; c < C; ++c)
         for (int x = 0; x < nx; ++x) walk[(r * nx + x) * C + c] = pairs[size_t(c) * nxp + x];
     });

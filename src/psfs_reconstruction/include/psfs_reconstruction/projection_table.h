@@ -14,8 +14,9 @@
 // nothing in accuracy and 1.5 bytes per voxel and camera instead of 24.
 //
 // Face samples are shared: the face between voxels A (lower) and B (upper) along an axis is
-// sampled once, at A's centre + A's offset when camera c observes A, else at B's centre - B's
-// offset (see psfs_kernels.h). So a voxel costs 3 bilinear lookups per camera, not 6.
+// sampled once, at A's centre + A's offset when A's centre projects into camera c's image, else
+// at B's centre - B's offset (see psfs_kernels.h). So a voxel costs 3 bilinear lookups per
+// camera, not 6.
 #pragma once
 
 #include <cstdint>
@@ -87,8 +88,10 @@ struct ProjectionTableOptions {
 
 class ProjectionTable {
  public:
-  // Largest sample offset the multi-projection test uses (pixels): half a voxel. Voxels bigger
-  // than ~14 pixels would need more than 6 samples anyway; the offsets are clamped to this.
+  // Largest sample offset the multi-projection test uses (pixels): half a voxel, clamped to
+  // this. A memory bound too: samples must stay inside the evidence images' 8 px border
+  // (static_assert in psfs_kernels.cpp). Voxels wider than ~14 pixels would need more than 6
+  // samples anyway (the default rig's 16 mm voxels are at most 4.5 px wide).
   static constexpr int kMaxSampleOffsetPx = 7;
   static constexpr int kChunk = 8;  // voxels per chunk along x (one AVX2 vector of int32)
 
