@@ -43,6 +43,7 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   // 15 frame sets per second (not 25): this test checks the wiring, not the speed (the demo
   // measures that), and a shared CI machine must not make the queues drop frame sets.
   ros::param::set("/tabletop/sim_rig/fps", 15.0);
+  ros::param::set("/tabletop/psfs/queue_size", 100);  // and psfs works off any backlog
   ros::param::set("/tabletop/frame_synchronizer/num_cameras", 8);
   ros::param::set("/tabletop/mpf/seed", 1);
 
@@ -85,7 +86,9 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
 
   ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return truth.size() >= size_t(kFrames); }, 90.0));
-  ros::WallDuration(2.5).sleep();  // last targets and a diagnostics round
+  // Queued frame sets, then the last targets and a diagnostics round.
+  waitFor([&] { std::lock_guard<std::mutex> l(m); return int(tracked.size()) >= kFrames - kEmpty; }, 30.0);
+  ros::WallDuration(2.5).sleep();
 
   std::unique_lock<std::mutex> lock(m);
   // Nearly every reconstructed frame set gives targets (the queues may drop one or two).

@@ -48,6 +48,9 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   ros::param::set("/tabletop/frame_synchronizer/num_cameras", 8);
   ros::param::set("/tabletop/psfs/config_file", std::string(PSFS_RECONSTRUCTION_CONFIG_DIR "/psfs.yaml"));
   ros::param::set("/tabletop/psfs/background_save_dir", bg_dir);
+  // Every frame set is waited for: this test checks what comes out, not whether a busy test
+  // machine keeps up with 25 fps (bench_fusion and the demo measure that).
+  ros::param::set("/tabletop/psfs/queue_size", 100);
 
   std::mutex m;
   std::vector<ros::Time> frame_stamps;  // in publication order = sim frame index
@@ -96,12 +99,14 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
 
   ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return frame_stamps.size() >= size_t(kFrames); }, 90.0));
-  ros::WallDuration(2.5).sleep();  // last volumes and a diagnostics round
+  // The queued sets, then a diagnostics round.
+  waitFor([&] { std::lock_guard<std::mutex> l(m); return int(skins.size()) >= kFrames - kEmpty; }, 30.0);
+  ros::WallDuration(2.5).sleep();
 
   std::unique_lock<std::mutex> lock(m);
   ASSERT_EQ(frame_stamps.size(), size_t(kFrames));
-  // No volume during learning; nearly every later set reconstructed (the queue may drop a set
-  // or two when the test machine is busy).
+  // No volume during learning; every later set reconstructed (a few spared: the synchroniser
+  // may still drop an incomplete set when the test machine is very busy).
   for (int i = 0; i < kEmpty; ++i) EXPECT_EQ(bodies.count(frame_stamps[i]), 0u) << "frame " << i;
   const int expected = kFrames - kEmpty;
   std::printf("[psfs] %zu body and %zu skin volumes, %zu hand volume sets for %d frame sets "

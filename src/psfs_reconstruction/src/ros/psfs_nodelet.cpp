@@ -59,6 +59,8 @@ class PsfsNodelet : public nodelet::Nodelet {
     try {
       cfg_ = loadReconstructorConfig(config_file);
       if (pnh.hasParam("threads")) pnh.getParam("threads", cfg_.params.threads);
+      if (pnh.hasParam("queue_size")) pnh.getParam("queue_size", cfg_.nodelet.queue_size);
+      if (cfg_.nodelet.queue_size < 1) throw std::runtime_error("~queue_size must be >= 1");
       if (pnh.hasParam("background_load_dir"))
         pnh.getParam("background_load_dir", cfg_.nodelet.background_load_dir);
       if (pnh.hasParam("background_save_dir"))
