@@ -134,25 +134,32 @@ inline uint8_t finalise(const PsfsRowParams& p, int32_t sum, int32_t n, const in
   return p.zero_outside ? 0 : static_cast<uint8_t>(std::min(b, p.t_byte));
 }
 
+// One voxel from its per-camera terms term(c) (> 0: no evidence), as the vector kernels fuse
+// them: sum, count of observing views, the K lowest terms.
+template <int K, class TermFn>
+uint8_t fuseTermsScalar(const PsfsRowParams& p, const TermFn& term) {
+  int32_t sum = 0, inactive = 0;
+  int32_t m[K > 0 ? K : 1];
+  for (int j = 0; j < K; ++j) m[j] = kNoEv;
+  for (int c = 0; c < p.num_cameras; ++c) {
+    int32_t t = term(c);
+    inactive += t > 0;
+    sum += std::min(t, 0);
+    for (int j = 0; j < K; ++j) {
+      const int32_t lo = std::min(m[j], t);
+      t = std::max(m[j], t);
+      m[j] = lo;
+    }
+  }
+  return finalise(p, sum, p.num_cameras - inactive, m, K);
+}
+
+inline int32_t centreTerm(const KernelView& v, uint32_t uv) { return v.terms[pixelOf(uv, v.width)]; }
+
 template <int K>
 void rowScalar(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
-  for (int x = 0; x < p.nx; ++x) {
-    int32_t sum = 0, inactive = 0;
-    int32_t m[K > 0 ? K : 1];
-    for (int j = 0; j < K; ++j) m[j] = kNoEv;
-    for (int c = 0; c < p.num_cameras; ++c) {
-      const KernelView& v = p.views[c];
-      int32_t t = v.terms[pixelOf(centres[c * p.nxp + x], v.width)];
-      inactive += t > 0;
-      sum += std::min(t, 0);
-      for (int j = 0; j < K; ++j) {
-        const int32_t lo = std::min(m[j], t);
-        t = std::max(m[j], t);
-        m[j] = lo;
-      }
-    }
-    out[x] = finalise(p, sum, p.num_cameras - inactive, m, K);
-  }
+  for (int x = 0; x < p.nx; ++x)
+    out[x] = fuseTermsScalar<K>(p, [&](int c) { return centreTerm(p.views[c], centres[c * p.nxp + x]); });
 }
 
 template <int K>
@@ -163,24 +170,11 @@ void faceRowScalar(const PsfsRowParams& p, const uint32_t* centres, const uint32
   for (int c = 0; c < p.num_cameras; ++c)
     facePairsScalar(p.views[c], p.nxp, centres + c * p.nxp, offsets + c * p.chunks * 3,
                     yface + c * p.nxp, zface + c * p.nxp, &pairs[size_t(c) * p.nxp]);
-  for (int x = 0; x < p.nx; ++x) {
-    int32_t sum = 0, inactive = 0;
-    int32_t m[K > 0 ? K : 1];
-    for (int j = 0; j < K; ++j) m[j] = kNoEv;
-    for (int c = 0; c < p.num_cameras; ++c) {
-      const KernelView& v = p.views[c];
-      const int32_t tc = v.terms[pixelOf(centres[c * p.nxp + x], v.width)];
-      int32_t t = tc > 0 ? kNoEv : logTermOfPair(pairs[size_t(c) * p.nxp + x]);
-      inactive += t > 0;
-      sum += std::min(t, 0);
-      for (int j = 0; j < K; ++j) {
-        const int32_t lo = std::min(m[j], t);
-        t = std::max(m[j], t);
-        m[j] = lo;
-      }
-    }
-    out[x] = finalise(p, sum, p.num_cameras - inactive, m, K);
-  }
+  for (int x = 0; x < p.nx; ++x)
+    out[x] = fuseTermsScalar<K>(p, [&](int c) {
+      return centreTerm(p.views[c], centres[c * p.nxp + x]) > 0 ? kNoEv
+                                                                : logTermOfPair(pairs[size_t(c) * p.nxp + x]);
+    });
 }
 
 // ------------------------------------------------------------------------------ AVX2 -------
