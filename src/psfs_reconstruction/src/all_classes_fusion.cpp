@@ -44,7 +44,6 @@ void AllClassesFusion::fuse(const ProjectionTable& table, const ViewEvidence& ev
   out->grid = table.grid();
   out->data.assign(table.grid().numVoxels(), 0);
   const int nx = table.grid().dims.x(), nxp = table.paddedRowLength();
-  const long long rows = static_cast<long long>(table.grid().numRows());
   const int k = options_.occluded_views;
   // One row; pairs = the multi-projection median pairs of the row ([c * nxp + x]) or nullptr.
   auto fuseRow = [&](size_t r, const uint32_t* centres, const int32_t* pairs) {
@@ -101,13 +100,8 @@ void AllClassesFusion::fuse(const ProjectionTable& table, const ViewEvidence& ev
                            });
     return;
   }
-#pragma omp parallel num_threads(resolveThreads(options_.threads))
-  {
-    std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
-#pragma omp for schedule(dynamic, 4)
-    for (long long r = 0; r < rows; ++r)
-      fuseRow(size_t(r), table.rowCentres(size_t(r), cs.data()), nullptr);
-  }
+  detail::forEachRow(table, options_.threads, 4,
+                     [&](size_t r, const uint32_t* centres) { fuseRow(r, centres, nullptr); });
 }
 
 }  // namespace psfs

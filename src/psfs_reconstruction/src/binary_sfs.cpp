@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cpu_dispatch.h"
+#include "fusion_common.h"
 
 namespace psfs {
 
@@ -51,34 +52,27 @@ void BinarySfs::carve(const ProjectionTable& table, ProbabilityVolume* out) cons
   out->grid = table.grid();
   out->data.resize(table.grid().numVoxels());
   const int nx = table.grid().dims.x(), nxp = table.paddedRowLength();
-  const long long rows = static_cast<long long>(table.grid().numRows());
   const int min_views = options_.min_views;
   uint8_t* dst = out->data.data();
-#pragma omp parallel num_threads(resolveThreads(options_.threads))
-  {
-    std::vector<uint32_t> scratch(table.precomputed() ? 0 : table.centreScratchSize());
-#pragma omp for schedule(dynamic, 8)
-    for (long long r = 0; r < rows; ++r) {
-      const uint32_t* centres = table.rowCentres(size_t(r), scratch.data());
-      // Same cache policy as the pSfS kernel: the table streams past without evicting the
-      // silhouette codes (a 128x128x96 table is larger than the last-level cache).
-      for (int i = 0; i < C * nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
-      uint8_t* o = dst + size_t(r) * nx;
-      for (int x = 0; x < nx; ++x) {
-        int seen = 0;
-        bool in = true;
-        for (int c = 0; c < C; ++c) {
-          const uint8_t k = codes[c][PackedUV::pixelIndex(centres[c * nxp + x], widths[c])];
-          if (k == 0) {
-            in = false;
-            break;
-          }
-          seen += k == 1;
+  detail::forEachRow(table, options_.threads, 8, [&](size_t r, const uint32_t* centres) {
+    // Same cache policy as the pSfS kernel: the table streams past without evicting the
+    // silhouette codes (a 128x128x96 table is larger than the last-level cache).
+    for (int i = 0; i < C * nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
+    uint8_t* o = dst + r * nx;
+    for (int x = 0; x < nx; ++x) {
+      int seen = 0;
+      bool in = true;
+      for (int c = 0; c < C; ++c) {
+        const uint8_t k = codes[c][PackedUV::pixelIndex(centres[c * nxp + x], widths[c])];
+        if (k == 0) {
+          in = false;
+          break;
         }
-        o[x] = (in && seen >= min_views) ? 255 : 0;
+        seen += k == 1;
       }
+      o[x] = (in && seen >= min_views) ? 255 : 0;
     }
-  }
+  });
 }
 
 }  // namespace psfs

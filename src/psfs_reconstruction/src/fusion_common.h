@@ -36,6 +36,19 @@ inline void checkInputs(const ProjectionTable& table, const ViewEvidence& eviden
     throw std::invalid_argument(who + ": multi-projection needs evidence set with bilinear = true");
 }
 
+// The rows of a grid in parallel, dynamic chunks of `chunk` rows: fn(row, centres) with the
+// row's ProjectionTable::rowCentres (a per-thread scratch when the table projects on the fly).
+template <class Fn>
+void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& fn) {
+  const long long rows = static_cast<long long>(table.grid().numRows());
+#pragma omp parallel num_threads(resolveThreads(threads))
+  {
+    std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
+#pragma omp for schedule(dynamic, chunk)
+    for (long long r = 0; r < rows; ++r) fn(size_t(r), table.rowCentres(size_t(r), cs.data()));
+  }
+}
+
 // Walks the rows of a multi-projection grid in the order the shared face samples need
 // (psfs_kernels.h). The work is split into slabs of consecutive z layers, each walked in
 // memory order (z, then y) by one thread with its own face buffers, so the stored table

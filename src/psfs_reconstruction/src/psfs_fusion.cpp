@@ -100,14 +100,9 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
     return;
   }
   const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
-  const long long rows = static_cast<long long>(table.grid().numRows());
-#pragma omp parallel num_threads(resolveThreads(options_.threads))
-  {
-    std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
-#pragma omp for schedule(dynamic, 8)
-    for (long long r = 0; r < rows; ++r)
-      row_fn(p, table.rowCentres(size_t(r), cs.data()), dst + size_t(r) * p.nx);
-  }
+  detail::forEachRow(table, options_.threads, 8, [&](size_t r, const uint32_t* centres) {
+    row_fn(p, centres, dst + r * p.nx);
+  });
 }
 
 }  // namespace psfs

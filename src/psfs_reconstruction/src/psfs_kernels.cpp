@@ -167,9 +167,7 @@ void faceRowScalar(const PsfsRowParams& p, const uint32_t* centres, const uint32
                    uint16_t* yface, uint16_t* zface, uint8_t* out) {
   thread_local std::vector<int32_t> pairs;
   pairs.resize(size_t(p.num_cameras) * p.nxp);
-  for (int c = 0; c < p.num_cameras; ++c)
-    facePairsScalar(p.views[c], p.nxp, centres + c * p.nxp, offsets + c * p.chunks * 3,
-                    yface + c * p.nxp, zface + c * p.nxp, &pairs[size_t(c) * p.nxp]);
+  medianPairsOfRow(p.views, p.num_cameras, p.nxp, centres, offsets, yface, zface, pairs.data());
   for (int x = 0; x < p.nx; ++x)
     out[x] = fuseTermsScalar<K>(p, [&](int c) {
       return centreTerm(p.views[c], centres[c * p.nxp + x]) > 0 ? kNoEv
@@ -382,7 +380,7 @@ __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, con
       const __m256i off_view = v.has_mask ? _mm256_cmpgt_epi32(centreTermAvx2(v, uv), _mm256_setzero_si256()) : unobs;
       accumulateAvx2<K>(_mm256_blendv_epi8(tm, no_ev, off_view), sum, inactive, m);
     }
-    if (x0 < p.nx) finaliseAvx2<K>(p, sum, inactive, m, out + x0, p.nx - x0);
+    finaliseAvx2<K>(p, sum, inactive, m, out + x0, p.nx - x0);  // x0 < nx: nxp - nx < 8
   }
 }
 
@@ -432,11 +430,6 @@ PSFS_AVX512 void cswap512(__m512i& a, __m512i& b) {
   const __m512i lo = _mm512_min_epi32(a, b);
   b = _mm512_max_epi32(a, b);
   a = lo;
-}
-
-// Offsets of two consecutive chunks (off0 for lanes 0-7, off1 for lanes 8-15).
-PSFS_AVX512 __m512i pairOf(int32_t lo, int32_t hi) {
-  return _mm512_inserti64x4(_mm512_set1_epi32(lo), _mm256_set1_epi32(hi), 1);
 }
 
 PSFS_AVX512 __m512i middlePair6_512(__m512i s[6]) {
@@ -549,7 +542,8 @@ PSFS_AVX512 __m512i loadCentres512(const uint32_t* p, bool two) {
 
 // Offsets of two consecutive chunks (lanes 0-7 and 8-15) as packed int16 (du | dv << 16).
 PSFS_AVX512 __m512i chunkOffsets512(const uint32_t* off0, const uint32_t* off1, int axis) {
-  return pairOf(static_cast<int32_t>(off0[axis]), static_cast<int32_t>(off1[axis]));
+  return _mm512_inserti64x4(_mm512_set1_epi32(static_cast<int32_t>(off0[axis])),
+                            _mm256_set1_epi32(static_cast<int32_t>(off1[axis])), 1);
 }
 
 template <int K>
@@ -597,7 +591,7 @@ __attribute__((target("avx512f,avx512bw,avx2,fma"))) void faceRowAvx512(
                                             : static_cast<__mmask16>(~obs);
       accumulate512<K>(_mm512_mask_mov_epi32(tm, off_view, no_ev), sum, inactive, m);
     }
-    if (x0 < p.nx) finalise512<K>(p, sum, inactive, m, out + x0, p.nx - x0);
+    finalise512<K>(p, sum, inactive, m, out + x0, p.nx - x0);  // x0 < nx: nxp - nx < 8
   }
 }
 
