@@ -40,10 +40,12 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   ros::param::set("/tabletop/sim_rig/empty_frames", kEmpty);
   ros::param::set("/tabletop/sim_rig/script", std::string("reach_targets"));
   ros::param::set("/tabletop/sim_rig/start_delay", 1.5);
-  // 15 frame sets per second (not 25): this test checks the wiring, not the speed (the demo
-  // measures that), and a shared CI machine must not make the queues drop frame sets.
-  ros::param::set("/tabletop/sim_rig/fps", 15.0);
-  ros::param::set("/tabletop/psfs/queue_size", 100);  // and psfs works off any backlog
+  // Lockstep: the rig renders a set only while fewer than 2 wait for pSfS and the tracker, so
+  // on any machine, however slow or loaded, no stage drops a set (this test checks what comes
+  // out, not the speed; the demo and the benchmarks measure that). pSfS keeps its live queue.
+  ros::param::set("/tabletop/sim_rig/lockstep", 2);
+  ros::param::set("/tabletop/sim_rig/lockstep_timeout", 30.0);
+  ros::param::set("/tabletop/psfs/tracker_timeout", 30.0);
   ros::param::set("/tabletop/frame_synchronizer/num_cameras", 8);
   ros::param::set("/tabletop/mpf/seed", 1);
 
@@ -75,6 +77,7 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   auto s2 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 300, on_truth);
   auto s3 = nh.subscribe<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 300, on_hands);
   tabletop_capture::test_support::DiagnosticsValues diag("mpf hand tracking");
+  tabletop_capture::test_support::DiagnosticsValues psfs_diag("psfs reconstruction");
   auto s5 = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 300, on_meshes);
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
@@ -85,15 +88,16 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
   ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
 
-  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return truth.size() >= size_t(kFrames); }, 90.0));
-  // Queued frame sets, then the last targets and a diagnostics round.
-  waitFor([&] { std::lock_guard<std::mutex> l(m); return int(tracked.size()) >= kFrames - kEmpty; }, 30.0);
+  // Generous limits: a quarter of a slow machine's CPU takes ~1 s per set.
+  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return truth.size() >= size_t(kFrames); }, 280.0));
+  // The last targets and meshes, then a diagnostics round.
+  waitFor([&] { std::lock_guard<std::mutex> l(m); return int(tracked.size()) >= kFrames - kEmpty; }, 60.0);
   ros::WallDuration(2.5).sleep();
 
   std::unique_lock<std::mutex> lock(m);
-  // Nearly every reconstructed frame set gives targets (the queues may drop one or two).
+  // Every reconstructed frame set gives targets: nothing is dropped in lockstep.
   std::printf("[mpf] %zu target sets for %d frame sets with the person\n", tracked.size(), kFrames - kEmpty);
-  EXPECT_GE(int(tracked.size()), kFrames - kEmpty - 3);
+  EXPECT_EQ(int(tracked.size()), kFrames - kEmpty);
   sim::TrackingEvaluator ev;
   for (const auto& t : tracked) {
     auto g = truth.find(t.first);
@@ -140,11 +144,14 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   }
   std::printf("[mpf] %zu hand mesh sets for %zu volume sets; %zu of %zu meshes with matching ids "
               "and > 1000 triangles\n", mesh_sets, hand_volumes.size(), meshes_ok, volumes_total);
-  EXPECT_GE(mesh_sets + 3, hand_volumes.size());
+  EXPECT_EQ(mesh_sets, hand_volumes.size());  // the mesher's queue never drops
   EXPECT_GE(meshes_ok + 6, volumes_total);
   // tf of the head.
   EXPECT_TRUE(tf_buffer.canTransform("world", "head", ros::Time(0)));
   ASSERT_TRUE(diag.has("volumes rejected"));
+  ASSERT_TRUE(psfs_diag.has("frame sets dropped (pipeline busy)"));
+  EXPECT_EQ(psfs_diag.get("frame sets dropped (pipeline busy)"), "0");
+  EXPECT_EQ(psfs_diag.get("tracker ack timeouts"), "0");
   EXPECT_EQ(diag.get("volumes rejected"), "0");
   std::printf("[mpf] diagnostics: mpf total %s ms\n", diag.get("mpf total (ms)").c_str());
   lock.unlock();

@@ -38,6 +38,12 @@ void validateParams(const BackgroundModelParams& p) {
     throw std::invalid_argument("background model: min_sigma_rg must be > 0");
   if (!(p.min_sigma_intensity > 0.0f && std::isfinite(p.min_sigma_intensity)))
     throw std::invalid_argument("background model: min_sigma_intensity must be > 0");
+  if (!(p.learning_change_sigmas > 0.0f && std::isfinite(p.learning_change_sigmas)))
+    throw std::invalid_argument("background model: learning_change_sigmas must be > 0");
+  if (!(p.learning_change_fraction > 0.0f && p.learning_change_fraction <= 1.0f))
+    throw std::invalid_argument("background model: learning_change_fraction must lie in (0, 1]");
+  if (p.min_learning_frames < 2)
+    throw std::invalid_argument("background model: min_learning_frames must be >= 2");
 }
 
 PSFS_ALWAYS_INLINE void updateRowParams(int w, const float* __restrict r, const float* __restrict g,
@@ -131,6 +137,40 @@ void BackgroundModel::addLearningFrame(const cv::Mat& rgb) {
   }
   ++frames_;
   if (frames_ >= params_.learning_frames) finalizeLearning();
+}
+
+double BackgroundModel::changedFraction(const cv::Mat& rgb) const {
+  if (width_ == 0) throw std::logic_error("background model: not initialised (size 0)");
+  if (ready_ || frames_ < 1)
+    throw std::logic_error("background model: changedFraction needs a model that is learning");
+  checkRgb8(rgb, width_, height_, "background learning frame");
+  const double n = frames_;
+  const double k2 = double(params_.learning_change_sigmas) * params_.learning_change_sigmas;
+  // Sigmas: the learned frames' own spread, at least twice the floors (a few frames give a
+  // poor variance estimate).
+  const double floor_rg2 = 4.0 * params_.min_sigma_rg * params_.min_sigma_rg;
+  const double floor_i2 = 4.0 * params_.min_sigma_intensity * params_.min_sigma_intensity;
+  // rg of dark pixels is mostly noise (a 2-level error at I = 10 moves r by 0.07).
+  constexpr float kMinChromaIntensity = 40.0f;
+  auto var = [n](double s, double s2) { return n > 1 ? std::max(0.0, (s2 - s * s / n) / (n - 1.0)) : 0.0; };
+  std::vector<float> r(width_), g(width_), in(width_);
+  std::size_t changed = 0;
+  for (int y = 0; y < height_; ++y) {
+    kernels::rgbRowToRgI(rgb.ptr<std::uint8_t>(y), width_, r.data(), g.data(), in.data());
+    const std::size_t o = std::size_t(y) * width_;
+    for (int x = 0; x < width_; ++x) {
+      const std::size_t i = o + x;
+      const double mi = sum_[2][i] / n, di = in[x] - mi;
+      bool c = di * di > k2 * std::max(floor_i2, var(sum_[2][i], sum_[5][i]));
+      if (!c && in[x] >= kMinChromaIntensity && mi >= kMinChromaIntensity) {
+        const double dr = r[x] - sum_[0][i] / n, dg = g[x] - sum_[1][i] / n;
+        c = dr * dr > k2 * std::max(floor_rg2, var(sum_[0][i], sum_[3][i])) ||
+            dg * dg > k2 * std::max(floor_rg2, var(sum_[1][i], sum_[4][i]));
+      }
+      changed += c;
+    }
+  }
+  return double(changed) / (double(width_) * height_);
 }
 
 void BackgroundModel::finishLearning() {

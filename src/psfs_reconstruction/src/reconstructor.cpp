@@ -76,6 +76,7 @@ bool Reconstructor::backgroundReady() const {
 
 void Reconstructor::resetBackground() {
   for (auto& b : backgrounds_) b = BackgroundModel(b.width(), b.height(), params_.background);
+  learning_skips_ = 0;
 }
 
 void Reconstructor::validateFrame(const std::vector<cv::Mat>& rgb,
@@ -151,6 +152,44 @@ void Reconstructor::adoptRig(const std::vector<tabletop_capture::CameraModel>& c
   }
 }
 
+Reconstructor::LearningVerdict Reconstructor::checkLearningFrame(
+    const std::vector<cv::Mat>& rgb, std::vector<std::string>* warnings) {
+  const int learned = backgrounds_[0].learnedFrames();
+  if (learned < 1) return LearningVerdict::kLearn;
+  const BackgroundModelParams& bp = params_.background;
+  double worst = 0;
+  size_t worst_camera = 0;
+  for (size_t i = 0; i < backgrounds_.size(); ++i) {
+    const double f = backgrounds_[i].changedFraction(rgb[i]);
+    if (f > worst) worst = f, worst_camera = i;
+  }
+  if (worst <= bp.learning_change_fraction) {
+    learning_skips_ = 0;
+    return LearningVerdict::kLearn;
+  }
+  const std::string what = percent(worst) + " of " + cameras_[worst_camera].name +
+                           "'s pixels changed against the " + std::to_string(learned) +
+                           " empty frame sets learned so far";
+  if (learned >= std::min(bp.min_learning_frames, bp.learning_frames)) {
+    warnings->push_back("background learning ended after " + std::to_string(learned) + " of " +
+                        std::to_string(bp.learning_frames) + " frame sets: " + what +
+                        " (a person came into view); reconstructing from here");
+    learning_skips_ = 0;
+    return LearningVerdict::kEndLearning;
+  }
+  warnings->push_back("frame set not learned into the background: " + what +
+                      " (a person in view?)");
+  if (++learning_skips_ >= bp.learning_frames) {
+    // The scene stays changed: the few frames learned first were the odd ones out.
+    warnings->push_back("the scene differed from the first " + std::to_string(learned) +
+                        " learned frame sets for " + std::to_string(learning_skips_) +
+                        " sets: learning the background again from scratch");
+    resetBackground();
+    learning_skips_ = 0;
+  }
+  return LearningVerdict::kSkip;
+}
+
 FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
                                    const std::vector<tabletop_capture::CameraModel>& cameras,
                                    const std::vector<Eigen::Vector3d>& hand_rois,
@@ -166,12 +205,18 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
 
   if (!backgroundReady()) {
     const auto t0 = Clock::now();
-    for (int i = 0; i < n; ++i) backgrounds_[i].addLearningFrame(rgb[i]);
-    r.times.background = msSince(t0);
-    r.background_frames = backgrounds_[0].learnedFrames();
-    r.status = FrameResult::Status::kLearningBackground;
-    r.times.total = msSince(t_start);
-    return r;
+    const LearningVerdict v = checkLearningFrame(rgb, &r.warnings);
+    if (v != LearningVerdict::kEndLearning) {
+      if (v == LearningVerdict::kLearn)
+        for (int i = 0; i < n; ++i) backgrounds_[i].addLearningFrame(rgb[i]);
+      r.learning_skipped = v == LearningVerdict::kSkip;
+      r.times.background = msSince(t0);
+      r.background_frames = backgrounds_[0].learnedFrames();
+      r.status = FrameResult::Status::kLearningBackground;
+      r.times.total = msSince(t_start);
+      return r;
+    }
+    for (auto& b : backgrounds_) b.finishLearning();  // and reconstruct this set below
   }
   r.status = FrameResult::Status::kReconstructed;
   r.background_frames = backgrounds_[0].learnedFrames();

@@ -113,6 +113,9 @@ ReconstructorConfig loadReconstructorConfig(const std::string& path) {
                      .field("learning_rate", &p.background.learning_rate)
                      .field("min_sigma_rg", &p.background.min_sigma_rg)
                      .field("min_sigma_intensity", &p.background.min_sigma_intensity)
+                     .field("learning_change_sigmas", &p.background.learning_change_sigmas)
+                     .field("learning_change_fraction", &p.background.learning_change_fraction)
+                     .field("min_learning_frames", &p.background.min_learning_frames)
                      .field("update", &p.update_background)
                      .field("mask_margin_px", &p.mask_margin_px)
                      .read();
@@ -157,6 +160,10 @@ ReconstructorConfig loadReconstructorConfig(const std::string& path) {
                  Section(n, w)
                      .field("threads", &p.threads)
                      .field("queue_size", &c.nodelet.queue_size)
+                     .field("wait_for_tracker", &c.nodelet.wait_for_tracker)
+                     .field("tracker_timeout", &c.nodelet.tracker_timeout)
+                     .field("load_shedding", &c.nodelet.load_shedding)
+                     .field("shed_drop_fraction", &c.nodelet.shed_drop_fraction)
                      .field("foreground_mask_topics", &c.nodelet.foreground_mask_topics)
                      .field("background_load_dir", &c.nodelet.background_load_dir)
                      .field("background_save_dir", &c.nodelet.background_save_dir)
@@ -179,6 +186,10 @@ ReconstructorConfig loadReconstructorConfig(const std::string& path) {
   if (c.nodelet.max_hand_rois < 0 || c.nodelet.max_hand_rois > 8)
     throw std::runtime_error(where + "hand_volumes/max_hands: must lie in [0, 8]");
   if (c.nodelet.queue_size < 1) throw std::runtime_error(where + "nodelet/queue_size: must be >= 1");
+  if (!(c.nodelet.tracker_timeout >= 0 && c.nodelet.tracker_timeout <= 600))
+    throw std::runtime_error(where + "nodelet/tracker_timeout: must lie in [0, 600] s");
+  if (!(c.nodelet.shed_drop_fraction > 0 && c.nodelet.shed_drop_fraction < 1))
+    throw std::runtime_error(where + "nodelet/shed_drop_fraction: must lie in (0, 1)");
   c.skin_model_path = (!skin_model.empty() && skin_model[0] == '/') ? skin_model
                                                                      : directoryOf(path) + "/" + skin_model;
   return c;

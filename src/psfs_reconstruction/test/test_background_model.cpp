@@ -228,3 +228,25 @@ TEST(BackgroundModel, RejectsBadInput) {
   s.update(white, cv::Mat());
   EXPECT_TRUE(cv::checkRange(s.meanR()) && cv::checkRange(s.varianceR()));
 }
+
+// Learning only from empty frames: sensor noise (2 levels, dark bands included) changes almost
+// no pixel at 5 sigma, while an object covering 12 % of the image shows as ~12 % changed.
+TEST(BackgroundModel, ChangedFractionSeesAnObjectNotTheNoise) {
+  const std::vector<Rgb> bands = {{180, 150, 110}, {20, 18, 15}, {60, 80, 160}, {200, 140, 110}};
+  BackgroundModel m(W, H);
+  std::mt19937_64 rng(7);
+  expectThrowContaining<std::logic_error>([&] { m.changedFraction(psfs_test::noisyBandScene(W, H, bands, 2.0, rng)); },
+                                          "learning");
+  for (int i = 0; i < 5; ++i) {
+    m.addLearningFrame(psfs_test::noisyBandScene(W, H, bands, 2.0, rng));
+    const double noise = m.changedFraction(psfs_test::noisyBandScene(W, H, bands, 2.0, rng));
+    EXPECT_LT(noise, 0.001) << "after " << i + 1 << " frames";
+  }
+  cv::Mat person = psfs_test::noisyBandScene(W, H, bands, 2.0, rng);
+  const cv::Rect box(100, 60, 96, 96);  // 12 % of the image, a dark-red sweater
+  person(box).setTo(cv::Scalar(90, 30, 40));
+  const double f = m.changedFraction(person);
+  const double expected = double(box.area()) / (W * H);
+  std::printf("[ figures  ] changed fraction %.4f for an object covering %.4f\n", f, expected);
+  EXPECT_NEAR(f, expected, 0.01);
+}

@@ -81,7 +81,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       ensureConnected();
     };
     connect_timer_ = nh.createWallTimer(ros::WallDuration(reconnect), on_connect);
-    sub_ = nh.subscribe("psfs/hand_volumes", 2, &CveBridgeNodelet::onVolumes, this);
+    // Sets are dropped only at the pSfS gate; later stages queue enough never to drop one.
+    sub_ = nh.subscribe("psfs/hand_volumes", 10, &CveBridgeNodelet::onVolumes, this);
     if (face_video_) {
       targets_sub_ = nh.subscribe("hands/targets", 2, &CveBridgeNodelet::onTargets, this);
       frames_sub_ = nh.subscribe("frames", 1, &CveBridgeNodelet::onFrames, this);

@@ -53,7 +53,8 @@ class HandMesherNodelet : public nodelet::Nodelet {
     pnh.param("world_frame", world_frame_, std::string("world"));
     mesh_pub_ = nh.advertise<tabletop_msgs::HandMeshes>("cve/hand_mesh_data", 5);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("cve/hand_meshes", 2);
-    sub_ = nh.subscribe("psfs/hand_volumes", 2, &HandMesherNodelet::onVolumes, this);
+    // Sets are dropped only at the pSfS gate; later stages queue enough never to drop one.
+    sub_ = nh.subscribe("psfs/hand_volumes", 10, &HandMesherNodelet::onVolumes, this);
     NODELET_INFO("hand_mesher: %s -> %s + %s, iso %.1f/255, %s",
                  sub_.getTopic().c_str(), mesh_pub_.getTopic().c_str(),
                  marker_pub_.getTopic().c_str(), mc_->options().iso,

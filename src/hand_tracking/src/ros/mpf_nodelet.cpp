@@ -106,8 +106,10 @@ class MpfNodelet : public nodelet::Nodelet {
     targets_pub_ = nh.advertise<tabletop_msgs::TrackedTargets>("hands/targets", 5);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("hands/markers", 2);
     tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-    skin_sub_ = nh.subscribe("psfs/skin_volume", 2, &MpfNodelet::onSkin, this);
-    body_sub_ = nh.subscribe("psfs/body_volume", 2, &MpfNodelet::onBody, this);
+    // Sets are dropped only at the pSfS gate (which also waits for our targets before the next
+    // set): these queues never fill, whatever the machine's speed.
+    skin_sub_ = nh.subscribe("psfs/skin_volume", 10, &MpfNodelet::onSkin, this);
+    body_sub_ = nh.subscribe("psfs/body_volume", 10, &MpfNodelet::onBody, this);
     NODELET_INFO("mpf: tracking on %s + %s, %d particles per hand, %d for the head, seed %d",
                  skin_sub_.getTopic().c_str(), body_sub_.getTopic().c_str(),
                  tracker_->params().hand_particles, tracker_->params().head_particles, seed);

@@ -38,6 +38,18 @@ struct BackgroundModelParams {
   // thesis' 256x256 rg grid. Intensity: 2 levels (8-bit).
   float min_sigma_rg = 0.004f;
   float min_sigma_intensity = 2.0f;
+  // Learning only from empty frames: a learning frame is compared with the frames learned so
+  // far, and a pixel counts as changed when it lies more than learning_change_sigmas standard
+  // deviations away in intensity or (for pixels bright enough for colour) in rg; sigmas are
+  // at least twice the floors above. A frame in which more than learning_change_fraction of a
+  // camera's pixels changed shows something new (a person sitting down) and is not learned.
+  // Sensor noise changes well under 0.1 % of the pixels at 5 sigma; a person fills 5-40 %.
+  float learning_change_sigmas = 5.0f;
+  float learning_change_fraction = 0.01f;
+  // When such a frame arrives after at least min_learning_frames learned ones, learning ends
+  // there (the recording's empty part was shorter than learning_frames, or its first sets were
+  // missed) and the frame is reconstructed; before that, it is skipped.
+  int min_learning_frames = 10;
 };
 
 // Read-only view of the planes the classifier needs, row-major, width*height floats each.
@@ -73,6 +85,11 @@ class BackgroundModel {
   // Ends learning early (needs >= 2 frames); throws std::logic_error otherwise.
   void finishLearning();
   int learnedFrames() const { return frames_; }
+  // While learning, after at least one frame: the fraction of this frame's pixels that changed
+  // against the frames learned so far (see BackgroundModelParams::learning_change_sigmas).
+  // Throws like addLearningFrame, and std::logic_error when no frame was learned or the model
+  // is ready.
+  double changedFraction(const cv::Mat& rgb) const;
   bool ready() const { return ready_; }
 
   // --- selective update -------------------------------------------------------------------

@@ -1,7 +1,8 @@
 // One frame set in, the pSfS volumes out: the whole per-frame pipeline of thesis chapter 4 as a
 // ROS-free object (the nodelet is a thin wrapper around it, tests drive it directly).
 //
-//   background learning (first learning_frames sets, or a loaded model)
+//   background learning (first learning_frames sets, or a loaded model; a set that shows a
+//   change against the sets learned so far, e.g. a person sitting down, is not learned)
 //   -> pixel classification (P'(F|c), P'(F,S|c) per camera, one pass)
 //   -> view evidence (log terms, bilinear pairs) for the body and the skin class
 //   -> body volume and skin volume on the workspace grid (shared projection table)
@@ -105,6 +106,9 @@ struct FrameResult {
   };
   Status status = Status::kLearningBackground;
   int background_frames = 0;  // learned so far (== learning_frames once ready)
+  // While learning: the set showed a change against the sets learned so far (a person in
+  // view) and was not learned (see BackgroundModelParams::learning_change_fraction).
+  bool learning_skipped = false;
   ProbabilityVolume body, skin;
   std::vector<ProbabilityVolume> hands;  // one per requested ROI, same order
   std::vector<ClassificationStats> stats;
@@ -156,6 +160,10 @@ class Reconstructor {
                      const std::vector<tabletop_capture::CameraModel>& cameras) const;
   void adoptRig(const std::vector<tabletop_capture::CameraModel>& cameras,
                 std::vector<std::string>* warnings);
+  // Learning only from empty frame sets (BackgroundModelParams::learning_change_*).
+  enum class LearningVerdict { kLearn, kSkip, kEndLearning };
+  LearningVerdict checkLearningFrame(const std::vector<cv::Mat>& rgb,
+                                     std::vector<std::string>* warnings);
 
   ReconstructorParams params_;
   PixelClassifier classifier_;
@@ -168,6 +176,7 @@ class Reconstructor {
   std::vector<std::unique_ptr<ProjectionTable>> hand_tables_;
   std::vector<cv::Mat> likelihoods_;
   ViewEvidence body_evidence_, skin_evidence_;
+  int learning_skips_ = 0;  // changed learning sets in a row
 };
 
 }  // namespace psfs

@@ -21,7 +21,20 @@ struct NodeletOptions {
   // Subscribe cam<i>/foreground_mask (mono8, same stamp as the frame set) for the selective
   // background update instead of the volume's back-projection.
   bool foreground_mask_topics = false;
-  int queue_size = 2;  // frame sets waiting; older ones are dropped when fusion falls behind
+  // Frame sets waiting in the stage's gate (tabletop_capture/pipeline_gate.h): beyond it the
+  // oldest waiting set is dropped (the pipeline's one drop point). Live: 1; offline evaluation:
+  // larger than the recording, so that every set is processed whatever the machine's speed.
+  int queue_size = 1;
+  // Closed loop: after publishing a set's volumes, wait for the tracker's targets with that
+  // stamp (on hand_roi_topic) before the next set, so its hand ROIs never depend on timing.
+  // Only while the topic has a publisher; at most tracker_timeout seconds per set.
+  bool wait_for_tracker = true;
+  double tracker_timeout = 1.0;
+  // Live load shedding: when more than shed_drop_fraction of the last sets were dropped, hand
+  // volumes are computed on every other set only (reported on /diagnostics), until no set was
+  // dropped for a while. Off for offline evaluation.
+  bool load_shedding = true;
+  double shed_drop_fraction = 0.1;
   std::string background_load_dir;  // load <dir>/<camera>.bgm instead of learning ("" = learn)
   std::string background_save_dir;  // save the model there once learned ("" = don't)
   bool publish_clouds = true;       // psfs/*_cloud, only while someone subscribes

@@ -5,18 +5,34 @@
 //   psfs/body_volume, psfs/skin_volume   (tabletop_msgs/VoxelVolume, every reconstructed set)
 //   psfs/hand_volumes                    (tabletop_msgs/HandVolumes, when ROIs are requested)
 //   psfs/body_cloud, psfs/skin_cloud     (sensor_msgs/PointCloud2, only while subscribed)
-// and reports rate, per-stage times, learning progress, rejected sets and switched-off
-// cameras on /diagnostics.
+//   psfs/processed                       (std_msgs/Header per frame set taken in: its stamp, and
+//                                         frame_id learned | reconstructed | rejected | dropped;
+//                                         what a lockstep source such as the SimRig paces on)
+// and reports rate, per-stage times, learning progress, rejected and dropped sets, load
+// shedding and switched-off cameras on /diagnostics.
+//
+// Frame sets wait in a PipelineGate (tabletop_capture/pipeline_gate.h) and are processed on the
+// nodelet's own thread: this is the pipeline's one drop point (live: the oldest waiting set goes
+// when nodelet/queue_size is exceeded; offline: a large queue_size keeps every set), and the
+// closed loop's lockstep (the next set waits for the tracker's targets of the last one).
 //
 // Private parameters:
 //   ~config_file          the YAML with every parameter   [$(find psfs_reconstruction)/config/psfs.yaml]
 //   ~threads              overrides nodelet/threads of the file (if set)
 //   ~background_load_dir  overrides nodelet/background_load_dir (if set)
 //   ~background_save_dir  overrides nodelet/background_save_dir (if set)
+//   ~queue_size, ~wait_for_tracker, ~tracker_timeout, ~load_shedding
+//                         override the nodelet/ keys of the file (if set)
 //   ~world_frame          frame of the volumes                               [world]
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <thread>
 
 #include <sys/stat.h>
 
@@ -28,6 +44,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_msgs/Header.h>
 
 #include <tabletop_msgs/HandVolumes.h>
 #include <tabletop_msgs/MultiViewFrame.h>
@@ -37,6 +54,7 @@
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/reconstructor_config.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
+#include "tabletop_capture/pipeline_gate.h"
 #include "tabletop_capture/ros/frame_set_view.h"
 #include "tabletop_capture/ros/periodic_diagnostics.h"
 #include "tabletop_capture/running_stats.h"
@@ -46,6 +64,23 @@ namespace psfs {
 using tabletop_capture::RunningStats;
 
 class PsfsNodelet : public nodelet::Nodelet {
+ public:
+  ~PsfsNodelet() override {
+    {
+      std::lock_guard<std::mutex> lock(gate_mutex_);
+      running_ = false;
+    }
+    gate_cv_.notify_all();
+    if (worker_.joinable()) worker_.join();
+  }
+
+ private:
+  using FramePtr = tabletop_msgs::MultiViewFrame::ConstPtr;
+
+  static double steadySeconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  }
+
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
@@ -61,6 +96,15 @@ class PsfsNodelet : public nodelet::Nodelet {
       if (pnh.hasParam("threads")) pnh.getParam("threads", cfg_.params.threads);
       if (pnh.hasParam("queue_size")) pnh.getParam("queue_size", cfg_.nodelet.queue_size);
       if (cfg_.nodelet.queue_size < 1) throw std::runtime_error("~queue_size must be >= 1");
+      if (pnh.hasParam("wait_for_tracker"))
+        pnh.getParam("wait_for_tracker", cfg_.nodelet.wait_for_tracker);
+      if (pnh.hasParam("tracker_timeout"))
+        pnh.getParam("tracker_timeout", cfg_.nodelet.tracker_timeout);
+      if (pnh.hasParam("load_shedding")) pnh.getParam("load_shedding", cfg_.nodelet.load_shedding);
+      tabletop_capture::PipelineGateConfig gate;
+      gate.capacity = static_cast<size_t>(cfg_.nodelet.queue_size);
+      gate.ack_timeout = cfg_.nodelet.tracker_timeout;
+      gate_.setConfig(gate);
       if (pnh.hasParam("background_load_dir"))
         pnh.getParam("background_load_dir", cfg_.nodelet.background_load_dir);
       if (pnh.hasParam("background_save_dir"))
@@ -77,17 +121,109 @@ class PsfsNodelet : public nodelet::Nodelet {
     hands_pub_ = nh.advertise<tabletop_msgs::HandVolumes>("psfs/hand_volumes", 2);
     body_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("psfs/body_cloud", 1);
     skin_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("psfs/skin_cloud", 1);
+    processed_pub_ = nh.advertise<std_msgs::Header>("psfs/processed", 50);
     roi_sub_ = nh.subscribe(cfg_.nodelet.hand_roi_topic, 5, &PsfsNodelet::onTargets, this);
-    frames_sub_ = nh.subscribe("frames", cfg_.nodelet.queue_size, &PsfsNodelet::onFrames, this);
-    NODELET_INFO("psfs: %s volumes from the frame sets on %s; config %s",
+    running_ = true;
+    worker_ = std::thread(&PsfsNodelet::work, this);
+    // The callback only queues the set in the gate: the ROS queue must never be what drops.
+    frames_sub_ = nh.subscribe("frames", 50, &PsfsNodelet::onFrameSet, this);
+    NODELET_INFO("psfs: %s volumes from the frame sets on %s; config %s; %s",
                  workspaceGrid(cfg_.params.workspace, cfg_.params.dims).describe().c_str(),
-                 frames_sub_.getTopic().c_str(), config_file.c_str());
+                 frames_sub_.getTopic().c_str(), config_file.c_str(),
+                 cfg_.nodelet.queue_size > 1000
+                     ? "every frame set is processed (offline)"
+                     : ("live: up to " + std::to_string(cfg_.nodelet.queue_size) +
+                        " set(s) wait, older ones are dropped" +
+                        (cfg_.nodelet.load_shedding ? ", load shedding on" : ""))
+                           .c_str());
+  }
+
+  // ---- the gate: queue, drop, lockstep --------------------------------------------------
+  void onFrameSet(const FramePtr& msg) {
+    std::deque<FramePtr> dropped;
+    {
+      std::lock_guard<std::mutex> lock(gate_mutex_);
+      // The learning sets are the recording's first ones: they are never dropped.
+      const bool keep = learning_sets_queued_ < cfg_.params.background.learning_frames &&
+                        !background_ready_;
+      learning_sets_queued_ += keep;
+      dropped = gate_.push(msg, keep);
+      recent_drops_.push_back(!dropped.empty());
+      while (recent_drops_.size() > kShedWindow) recent_drops_.pop_front();
+      updateShedding();
+    }
+    gate_cv_.notify_one();
+    for (const auto& d : dropped) {
+      NODELET_WARN_THROTTLE(5.0, "psfs: falling behind the cameras: frame set %.3f dropped "
+                            "(queue_size %d; the later stages get every set that goes on)",
+                            d->header.stamp.toSec(), cfg_.nodelet.queue_size);
+      publishProcessed(d->header.stamp, "dropped");
+    }
+  }
+
+  // Called with gate_mutex_ held. Hysteresis: on above the drop fraction, off after a window
+  // without drops.
+  void updateShedding() {
+    if (!cfg_.nodelet.load_shedding) return;
+    size_t drops = 0;
+    for (bool d : recent_drops_) drops += d;
+    const bool was = shedding_;
+    if (recent_drops_.size() >= kShedWindow / 2 &&
+        drops > cfg_.nodelet.shed_drop_fraction * recent_drops_.size())
+      shedding_ = true;
+    else if (drops == 0 && recent_drops_.size() >= kShedWindow)
+      shedding_ = false;
+    if (shedding_ != was)
+      NODELET_WARN("psfs: load shedding %s", shedding_ ? "ON: hand volumes on every other frame set "
+                                                         "only (the machine cannot keep up)"
+                                                       : "off: the machine keeps up again");
+  }
+
+  void work() {
+    std::unique_lock<std::mutex> lock(gate_mutex_);
+    while (running_) {
+      const double now = steadySeconds();
+      // A set's `processed` ack waits for the tracker's answer, so a lockstep source counts
+      // the whole closed loop as in flight.
+      if (deferred_processed_ && !gate_.waiting(now)) {
+        const ros::Time stamp = *deferred_processed_;
+        deferred_processed_.reset();
+        lock.unlock();
+        publishProcessed(stamp, "reconstructed");
+        lock.lock();
+        continue;
+      }
+      std::optional<FramePtr> next = gate_.pop(now);
+      if (!next) {
+        const double wait = gate_.secondsUntilTimeout(now);
+        gate_cv_.wait_for(lock, std::chrono::duration<double>(wait >= 0 ? wait + 1e-3 : 0.2));
+        continue;
+      }
+      const bool shed = shedding_;
+      lock.unlock();
+      process(*next, shed);
+      lock.lock();
+    }
+  }
+
+  void publishProcessed(const ros::Time& stamp, const char* what) {
+    auto h = boost::make_shared<std_msgs::Header>();
+    h->stamp = stamp;
+    h->frame_id = what;
+    processed_pub_.publish(h);
   }
 
   // ---- inputs ---------------------------------------------------------------------------
   void onTargets(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(roi_mutex_);
-    targets_ = msg;
+    {
+      std::lock_guard<std::mutex> lock(roi_mutex_);
+      targets_ = msg;
+    }
+    {
+      std::lock_guard<std::mutex> lock(gate_mutex_);
+      gate_.ack(msg->header.stamp.toNSec());
+    }
+    gate_cv_.notify_one();
   }
 
   void onMask(size_t camera, const sensor_msgs::Image::ConstPtr& msg) {
@@ -135,13 +271,15 @@ class PsfsNodelet : public nodelet::Nodelet {
   }
 
   // ---- per frame set --------------------------------------------------------------------
-  void onFrames(const tabletop_msgs::MultiViewFrame::ConstPtr& msg) {
+  // shed: load shedding is on; this set gets hand volumes only if it is an even one.
+  void process(const FramePtr& msg, bool shed) {
     const ros::WallTime t0 = ros::WallTime::now();
     std::vector<cv::Mat> rgb;
     std::vector<tabletop_capture::CameraModel> cams;
     std::string why;
     if (!tabletop_capture::unpackFrameSet(*msg, &rgb, &cams, &why)) {
       reject("frame set " + std::to_string(msg->header.stamp.toSec()) + " dropped: " + why);
+      publishProcessed(msg->header.stamp, "rejected");
       return;
     }
     if (!load_tried_ && !cfg_.nodelet.background_load_dir.empty()) {
@@ -155,7 +293,12 @@ class PsfsNodelet : public nodelet::Nodelet {
                       e.what(), cfg_.params.background.learning_frames);
       }
     }
-    const auto rois = currentRois(msg->header.stamp);
+    auto rois = currentRois(msg->header.stamp);
+    const bool skip_hands = shed && (shed_counter_++ % 2 == 1);
+    if (skip_hands) {
+      hands_shed_ += !rois.empty();
+      rois.clear();
+    }
     std::vector<Eigen::Vector3d> centres;
     for (const auto& r : rois) centres.push_back(r.second);
     FrameResult r;
@@ -163,9 +306,14 @@ class PsfsNodelet : public nodelet::Nodelet {
       r = recon_->process(rgb, cams, centres, currentMasks(*msg));
     } catch (const std::exception& e) {
       reject("frame set " + std::to_string(msg->header.stamp.toSec()) + " dropped: " + e.what());
+      publishProcessed(msg->header.stamp, "rejected");
       return;
     }
     for (const auto& w : r.warnings) warnThrottled(w);
+    if (r.status == FrameResult::Status::kReconstructed) {
+      std::lock_guard<std::mutex> lock(gate_mutex_);
+      background_ready_ = true;
+    }
 
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++processed_;
@@ -175,6 +323,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       if (r.background_frames == 1 || r.background_frames % 10 == 0)
         NODELET_INFO("psfs: learning the background: %d/%d frame sets", r.background_frames,
                      cfg_.params.background.learning_frames);
+      publishProcessed(msg->header.stamp, "learned");
       return;
     }
     if (!announced_ready_) {
@@ -185,7 +334,18 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
     cameras_off_ = 0;
     for (bool a : r.camera_active) cameras_off_ += !a;
+    // Closed loop: the next set waits for the tracker's answer to this one. Noted before the
+    // volumes go out, so an ack can never come before the gate expects it.
+    bool deferred = false;
+    if (cfg_.nodelet.wait_for_tracker && roi_sub_.getNumPublishers() > 0 &&
+        body_pub_.getNumSubscribers() > 0) {
+      std::lock_guard<std::mutex> gate_lock(gate_mutex_);
+      gate_.expectAck(msg->header.stamp.toNSec(), steadySeconds());
+      deferred_processed_ = msg->header.stamp;  // published by work() once the tracker answered
+      deferred = true;
+    }
     publish(*msg, r, rois);
+    if (!deferred) publishProcessed(msg->header.stamp, "reconstructed");
     const StageTimes& t = r.times;
     classify_ms_.add(t.classify);
     evidence_ms_.add(t.evidence);
@@ -269,8 +429,18 @@ class PsfsNodelet : public nodelet::Nodelet {
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: " + fatal_);
       return;
     }
+    tabletop_capture::PipelineGateCounters gate;
+    size_t pending = 0;
+    bool shedding = false;
+    {
+      std::lock_guard<std::mutex> lock(gate_mutex_);
+      gate = gate_.counters();
+      pending = gate_.pendingCount();
+      shedding = shedding_;
+    }
     std::lock_guard<std::mutex> lock(stats_mutex_);
     const double rate = rate_.rate(reconstructed_);
+    const bool dropping = drops_growth_.grew(gate.dropped);
     const bool rejecting = rejections_.grew(rejected_);
     const bool warning = warnings_growth_.grew(warnings_);
     if (processed_ == 0)
@@ -281,6 +451,12 @@ class PsfsNodelet : public nodelet::Nodelet {
                        std::to_string(cfg_.params.background.learning_frames) + ")");
     else if (rejecting)
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting frame sets: " + last_error_);
+    else if (shedding)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "load shedding: hand volumes on every other frame set (cannot keep up)");
+    else if (dropping)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "dropping frame sets: the machine cannot keep up with the cameras");
     else if (warning || cameras_off_ > 0)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "degraded input (see the log)");
     else
@@ -288,6 +464,14 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("rate (Hz)", rate);
     stat.add("frame sets reconstructed", reconstructed_);
     stat.add("frame sets rejected", rejected_);
+    stat.add("frame sets received", gate.pushed);
+    stat.add("frame sets dropped (pipeline busy)", gate.dropped);
+    stat.add("drop rate (%)", gate.pushed ? 100.0 * gate.dropped / gate.pushed : 0.0);
+    stat.add("frame sets waiting", pending);
+    stat.add("load shedding", shedding ? "on (hand volumes every other set)" : "off");
+    stat.add("hand volume sets shed", hands_shed_.load());
+    stat.add("tracker acks", gate.acks);
+    stat.add("tracker ack timeouts", gate.ack_timeouts);
     stat.add("cameras switched off", cameras_off_);
     stat.add("classify (ms)", classify_ms_.mean());
     stat.add("evidence (ms)", evidence_ms_.mean());
@@ -300,8 +484,24 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("volume", workspaceGrid(cfg_.params.workspace, cfg_.params.dims).describe());
   }
 
+  static constexpr size_t kShedWindow = 50;  // recent sets the shedding decision looks at
+
   ReconstructorConfig cfg_;
   std::unique_ptr<Reconstructor> recon_;
+
+  // The gate and its worker thread; gate_mutex_ guards everything in this block.
+  std::mutex gate_mutex_;
+  std::condition_variable gate_cv_;
+  tabletop_capture::PipelineGate<FramePtr> gate_;
+  std::thread worker_;
+  bool running_ = false, background_ready_ = false, shedding_ = false;
+  int learning_sets_queued_ = 0;
+  std::deque<bool> recent_drops_;
+  std::optional<ros::Time> deferred_processed_;  // reconstructed, waiting for the tracker
+  uint64_t shed_counter_ = 0;           // worker thread only
+  std::atomic<uint64_t> hands_shed_{0};  // hand volume sets given up by load shedding
+  ros::Publisher processed_pub_;
+
   std::string world_frame_, fatal_;
   ros::Subscriber frames_sub_, roi_sub_;
   std::vector<ros::Subscriber> mask_subs_;
@@ -317,7 +517,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   int learned_ = 0, cameras_off_ = 0;
   uint64_t processed_ = 0, reconstructed_ = 0, rejected_ = 0, warnings_ = 0;
   tabletop_capture::RateMeter rate_;
-  tabletop_capture::GrowthMeter rejections_, warnings_growth_;
+  tabletop_capture::GrowthMeter rejections_, warnings_growth_, drops_growth_;
   std::string last_error_;
   std::map<std::string, ros::WallTime> warned_;
   // Per-stage times over the whole run (the demo's summary reads the means).

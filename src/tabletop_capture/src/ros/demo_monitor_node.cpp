@@ -17,6 +17,12 @@
 //   ~live_status_line  overwrite one status line (terminal) instead of a line every 5 s
 //                      [stdout is a tty]
 //   ~volume_threshold  a voxel is "in the volume" above this probability (the fusion's t)  [0.75]
+//   ~digests       write digests.txt: per frame set the CRC-32 of the body, skin and hand
+//                  volumes and the tracked targets, to compare two runs of one bag    [false]
+//
+// The summary also follows a frame set through the stages (sets in and out of each, from
+// their /diagnostics counters), the one place that drops them (pSfS), load shedding, and which
+// stage is the bottleneck (the largest time per set).
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -24,15 +30,18 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <mutex>
 #include <sstream>
 
+#include <boost/crc.hpp>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <ros/ros.h>
 
+#include <tabletop_msgs/HandVolumes.h>
 #include <tabletop_msgs/MultiViewFrame.h>
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
@@ -58,6 +67,19 @@ class DemoMonitor {
     double t = 0.75;
     pnh_.param("volume_threshold", t, t);
     threshold_byte_ = static_cast<uint8_t>(std::max(0.0, std::min(255.0, std::floor(255.0 * t))));
+    pnh_.param("digests", digests_, false);
+    if (digests_) {
+      boost::function<void(const tabletop_msgs::HandVolumes::ConstPtr&)> on_hands =
+          [this](const tabletop_msgs::HandVolumes::ConstPtr& m) {
+            std::string d;
+            for (size_t i = 0; i < m->volumes.size(); ++i)
+              d += " " + std::to_string(i < m->target_ids.size() ? m->target_ids[i] : 0) + ":" +
+                   crcOf(m->volumes[i].data);
+            std::lock_guard<std::mutex> lock(mutex_);
+            digest_[m->header.stamp]["hands"] = d;
+          };
+      hands_sub_ = nh_.subscribe<tabletop_msgs::HandVolumes>("psfs/hand_volumes", 300, on_hands);
+    }
     for (int k = 0; k < 2; ++k) {
       const std::string kind = k == 0 ? "body" : "skin";
       boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_rec =
@@ -70,7 +92,7 @@ class DemoMonitor {
     }
     frames_sub_ = nh_.subscribe("frames", 4, &DemoMonitor::onFrame, this);
     truth_sub_ = nh_.subscribe("ground_truth/targets", 50, &DemoMonitor::onTruth, this);
-    tracked_sub_ = nh_.subscribe("hands/targets", 50, &DemoMonitor::onTracked, this);
+    tracked_sub_ = nh_.subscribe("hands/targets", 300, &DemoMonitor::onTracked, this);
     diag_sub_ = nh_.subscribe("/diagnostics", 50, &DemoMonitor::onDiagnostics, this);
     timer_ = nh_.createWallTimer(ros::WallDuration(0.5), &DemoMonitor::onTimer, this);
     start_ = ros::WallTime::now();
@@ -97,8 +119,26 @@ class DemoMonitor {
   }
 
   // Tracker output and truth are paired by stamp, whichever arrives first.
+  static std::string crcOf(const std::vector<uint8_t>& data) {
+    boost::crc_32_type crc;
+    crc.process_bytes(data.data(), data.size());
+    char buf[16];
+    std::snprintf(buf, sizeof(buf), "%08x", crc.checksum());
+    return buf;
+  }
+
   void onTracked(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (digests_) {
+      std::string d;
+      char buf[128];
+      for (const auto& t : msg->targets) {
+        std::snprintf(buf, sizeof(buf), " %u%s:%.6f,%.6f,%.6f", t.id, t.active ? "" : "(off)",
+                      t.position.x, t.position.y, t.position.z);
+        d += buf;
+      }
+      digest_[msg->header.stamp]["targets"] = d;
+    }
     tracked_[msg->header.stamp] = msg;
     while (tracked_.size() > 100) tracked_.erase(tracked_.begin());
     scoreTracking(msg->header.stamp);
@@ -133,6 +173,7 @@ class DemoMonitor {
     auto& mine = truth ? truth_volumes_[kind] : recon_volumes_[kind];
     auto& other = truth ? recon_volumes_[kind] : truth_volumes_[kind];
     if (!truth) ++volumes_received_[kind];
+    if (!truth && digests_) digest_[msg->header.stamp][kind == 0 ? "body" : "skin"] = crcOf(msg->data);
     auto it = other.find(msg->header.stamp);
     if (it == other.end()) {
       mine[msg->header.stamp] = msg;
@@ -232,6 +273,7 @@ class DemoMonitor {
             kv.first.find("dropped") == std::string::npos && kv.first.find("late") == std::string::npos &&
             kv.first.find("incomplete") == std::string::npos &&
             kv.first.find("rejected") == std::string::npos &&
+            kv.first.find("(%)") == std::string::npos && kv.first.find("timeouts") == std::string::npos &&
             kv.first.find("switched off") == std::string::npos)
           continue;
         std::string v = kv.second;
@@ -249,6 +291,7 @@ class DemoMonitor {
       }
       if (!fields.empty()) s << "  " << st.first << ":" << fields << "\n";
     }
+    s << pipelineSummary();
     for (int k = 0; k < 2; ++k) {
       const char* kind = k == 0 ? "body" : "skin";
       if (iou_[k].count() > 0) {
@@ -283,7 +326,102 @@ class DemoMonitor {
     const std::string text = s.str();
     std::printf("%s", text.c_str());
     std::ofstream(output_dir_ + "/summary.txt") << text;
+    if (digests_) {
+      std::ofstream out(output_dir_ + "/digests.txt");
+      for (const auto& d : digest_) {
+        out << d.first.sec << "." << std::setw(9) << std::setfill('0') << d.first.nsec
+            << std::setfill(' ');
+        for (const char* k : {"body", "skin", "targets", "hands"}) {
+          auto it = d.second.find(k);
+          if (it != d.second.end()) out << " " << k << " " << it->second;
+        }
+        out << "\n";
+      }
+    }
     std::fflush(stdout);
+  }
+
+  // The last /diagnostics values of the stage whose status name ends with `task`.
+  const std::map<std::string, std::string>* stage(const std::string& task) const {
+    for (const auto& st : stages_)
+      if (st.first.size() >= task.size() &&
+          st.first.compare(st.first.size() - task.size(), task.size(), task) == 0)
+        return &st.second;
+    return nullptr;
+  }
+  static double number(const std::map<std::string, std::string>* st, const std::string& key) {
+    if (!st) return std::nan("");
+    auto it = st->find(key);
+    if (it == st->end()) return std::nan("");
+    try {
+      return std::stod(it->second);
+    } catch (...) {
+      return std::nan("");
+    }
+  }
+
+  // Sets through each stage, the drop point, shedding and the bottleneck (mutex_ held).
+  std::string pipelineSummary() const {
+    const auto* rig = stage("simulated rig");
+    const auto* sync = stage("frame synchronizer");
+    const auto* psfs = stage("psfs reconstruction");
+    const auto* mpf = stage("mpf hand tracking");
+    const auto* mesher = stage("hand meshing");
+    std::ostringstream s;
+    char buf[512];
+    s << "pipeline, frame sets per stage:";
+    if (rig) {
+      const double published = number(rig, "frames published"), nominal = number(rig, "nominal rate (Hz)");
+      const bool paced = rig->count("lockstep wait mean (ms)") > 0;
+      std::snprintf(buf, sizeof(buf), " rig %.0f", published);
+      s << buf;
+      if (paced && received_ > 1 && (last_ - first_).toSec() > 0) {
+        std::snprintf(buf, sizeof(buf), " (paced by the pipeline: %.1f of %.0f fps)",
+                      (received_ - 1) / (last_ - first_).toSec(), nominal);
+        s << buf;
+      }
+      s << " ->";
+    }
+    if (sync) {
+      std::snprintf(buf, sizeof(buf), " synchroniser %.0f ->", number(sync, "sets published"));
+      s << buf;
+    }
+    if (psfs) {
+      const double in = number(psfs, "frame sets received"), dropped = number(psfs, "frame sets dropped (pipeline busy)");
+      std::snprintf(buf, sizeof(buf), " pSfS %.0f in, %.0f dropped (%.1f %%), %.0f reconstructed",
+                    in, dropped, in > 0 ? 100.0 * dropped / in : 0.0,
+                    number(psfs, "frame sets reconstructed"));
+      s << buf;
+    }
+    if (mpf) {
+      std::snprintf(buf, sizeof(buf), " -> MPF %.0f", number(mpf, "frames"));
+      s << buf;
+    }
+    if (mesher) {
+      std::snprintf(buf, sizeof(buf), " -> hand meshes for %.0f sets", number(mesher, "frames"));
+      s << buf;
+    }
+    s << "\n";
+    if (psfs && psfs->count("load shedding"))
+      s << "load shedding          " << psfs->at("load shedding") << ", hand volume sets shed "
+        << (psfs->count("hand volume sets shed") ? psfs->at("hand volume sets shed") : "0") << "\n";
+    // Bottleneck: the stage with the largest time per frame set.
+    std::vector<std::pair<double, std::string>> per_set = {
+        {number(rig, "render time mean (ms)"), "simulated rig rendering"},
+        {number(psfs, "total (ms)"), "pSfS reconstruction"},
+        {number(mpf, "mpf total (ms)"), "MPF tracking"},
+        {2 * number(mesher, "meshing per hand (ms)"), "hand meshing (2 hands)"}};
+    std::string list;
+    double worst = -1;
+    std::string worst_name;
+    for (const auto& p : per_set) {
+      if (!std::isfinite(p.first)) continue;
+      std::snprintf(buf, sizeof(buf), "%s%s %.1f ms", list.empty() ? "" : ", ", p.second.c_str(), p.first);
+      list += buf;
+      if (p.first > worst) worst = p.first, worst_name = p.second;
+    }
+    if (!worst_name.empty()) s << "bottleneck             " << worst_name << " (per set: " << list << ")\n";
+    return s.str();
   }
 
  private:
@@ -413,7 +551,9 @@ class DemoMonitor {
   }
 
   ros::NodeHandle nh_, pnh_;
-  ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_;
+  ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_, hands_sub_;
+  bool digests_ = false;
+  std::map<ros::Time, std::map<std::string, std::string>> digest_;
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked_, scored_tracked_;
   sim::TrackingEvaluator tracking_;
   ros::WallTimer timer_;

@@ -46,7 +46,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    int num_cameras = 8, max_pending = 10, queue_size = 4;
+    int num_cameras = 8, max_pending = 10, queue_size = 4, image_queue_size = 10;
     std::string prefix = "cam";
     FrameSetAssemblerConfig cfg;
     pnh.param("num_cameras", num_cameras, num_cameras);
@@ -57,6 +57,9 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     pnh.param("world_frame", world_frame_, std::string("world"));
     pnh.param("tf_timeout", tf_timeout_, 0.05);
     pnh.param("queue_size", queue_size, queue_size);
+    pnh.param("image_queue_size", image_queue_size, image_queue_size);
+    pnh.param("hold_until_subscribers", hold_until_subscribers_, hold_until_subscribers_);
+    pnh.param("max_held", max_held_, max_held_);
     cfg.num_cameras = num_cameras;
     cfg.max_pending = static_cast<size_t>(std::max(1, max_pending));
     try {
@@ -75,8 +78,10 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       };
       boost::function<void(const sensor_msgs::CameraInfoConstPtr&)> on_info =
           [this, i](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(i, m); };
-      c.image_sub = nh.subscribe<sensor_msgs::Image>(c.name + "/image_raw", 5, on_image);
-      c.info_sub = nh.subscribe<sensor_msgs::CameraInfo>(c.name + "/camera_info", 5, on_info);
+      c.image_sub = nh.subscribe<sensor_msgs::Image>(c.name + "/image_raw",
+                                                     std::max(1, image_queue_size), on_image);
+      c.info_sub = nh.subscribe<sensor_msgs::CameraInfo>(c.name + "/camera_info",
+                                                         std::max(1, image_queue_size), on_info);
     }
     pub_ = nh.advertise<tabletop_msgs::MultiViewFrame>("frames", queue_size);
     diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
@@ -193,6 +198,32 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     assembler_->expire(newest_stamp_ + (ros::WallTime::now() - newest_arrival_).toSec());
     warnDropped(missing_before);
     for (auto& set : assembler_->takeCompleted()) publishSet(set);
+    flushHeld();
+  }
+
+  // Called with mutex_ held. The first sets of a recording are the background-learning sets:
+  // until hold_until_subscribers stages listen on `frames` (a nodelet that loads late, a
+  // recording that starts at once), sets are held here instead of being lost.
+  void emit(const tabletop_msgs::MultiViewFrameConstPtr& out) {
+    held_.push_back(out);
+    while (static_cast<int>(held_.size()) > std::max(1, max_held_)) {
+      held_.pop_front();
+      ++held_dropped_;
+      NODELET_WARN_THROTTLE(5.0, "frame synchroniser: nobody listens on %s: oldest held frame "
+                            "set dropped (max_held %d)", pub_.getTopic().c_str(), max_held_);
+    }
+    flushHeld();
+  }
+
+  void flushHeld() {
+    if (held_.empty()) return;
+    if (static_cast<int>(pub_.getNumSubscribers()) < hold_until_subscribers_) return;
+    if (held_.size() > 1)
+      NODELET_INFO("frame synchroniser: %zu frame sets held until %d subscriber(s) listened: "
+                   "publishing them", held_.size(), hold_until_subscribers_);
+    for (const auto& m : held_) pub_.publish(m);
+    held_.clear();
+    hold_until_subscribers_ = 0;  // only at start-up: later, a live pipeline must not stall
   }
 
   // Called with mutex_ held. Copies each image once, into the bundle.
@@ -224,7 +255,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       out->camera_poses[i] = toTransform(c.pose);
     }
     notePublishedFrame(out.get());
-    pub_.publish(tabletop_msgs::MultiViewFrameConstPtr(out));
+    emit(out);
     bundle_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
     ++published_;
   }
@@ -290,6 +321,8 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     stat.add("convert time mean (ms)", convert_ms_.mean());
     stat.add("bundle time mean (ms)", bundle_ms_.mean());
     stat.add("pending sets", assembler_->pendingCount());
+    stat.add("sets held for subscribers", held_.size());
+    stat.add("held sets dropped (nobody listened)", held_dropped_);
     for (size_t c = 0; c < cameras_.size(); ++c) {
       std::ostringstream v;
       v << cameras_[c].images << " received, " << cameras_[c].rejected << " rejected, "
@@ -307,6 +340,9 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   ros::WallTimer tick_;
   std::string world_frame_;
   double tf_timeout_ = 0.05;
+  int hold_until_subscribers_ = 1, max_held_ = 100;
+  std::deque<tabletop_msgs::MultiViewFrameConstPtr> held_;
+  uint64_t held_dropped_ = 0;
   std::mutex mutex_;
   ros::WallTime newest_arrival_, last_diag_;
   double newest_stamp_ = 0;

@@ -3,7 +3,16 @@
 // ground_truth/targets and ground_truth/body_pose, and (every ~truth_volume_every frames) the
 // oracle's occupancy as ground_truth/body_volume and ground_truth/skin_volume for evaluating
 // the reconstruction. All rendering lives in sim::SimulatedRig.
+//
+// Lockstep (~lockstep = K > 0): the rig renders a frame only while fewer than K of its frames
+// wait for their ack on ~lockstep_topic (psfs/processed), so it never outruns the pipeline it
+// feeds: on a slow machine it renders at the rate the pipeline sustains (reported as the rig's
+// rate) instead of starving it of CPU and making it drop sets. Before the first frame it waits
+// for the ack topic's publisher, so the first (background-learning) sets are not missed. An ack
+// that does not come within ~lockstep_timeout seconds is counted and waited for no longer.
 #include <atomic>
+#include <condition_variable>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -15,6 +24,7 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include "tabletop_capture/rig_description.h"
@@ -31,6 +41,7 @@ class SimRigNodelet : public nodelet::Nodelet {
  public:
   ~SimRigNodelet() override {
     running_ = false;
+    ack_cv_.notify_all();
     if (worker_.joinable()) worker_.join();
   }
 
@@ -59,6 +70,10 @@ class SimRigNodelet : public nodelet::Nodelet {
     pnh.param("max_frames", max_frames_, 0);
     pnh.param("start_delay", start_delay_, 1.0);
     pnh.param("realtime", realtime_, true);
+    pnh.param("lockstep", lockstep_, 0);
+    pnh.param("lockstep_timeout", lockstep_timeout_, 5.0);
+    std::string lockstep_topic = "psfs/processed";
+    pnh.param("lockstep_topic", lockstep_topic, lockstep_topic);
     // Oracle volumes: every N-th frame (0 = never), on the workspace box at these dims.
     pnh.param("truth_volume_every", truth_every_, 0);
     std::vector<int> dims{64, 64, 48};
@@ -100,16 +115,56 @@ class SimRigNodelet : public nodelet::Nodelet {
       truth_skin_pub_ = nh.advertise<tabletop_msgs::VoxelVolume>("ground_truth/skin_volume", 4);
     }
     world_frame_ = rig.world_frame;
+    if (lockstep_ > 0)
+      ack_sub_ = nh.subscribe(lockstep_topic, 100, &SimRigNodelet::onAck, this);
 
     diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
         nh, pnh, getName(), "simulated_rig", "simulated rig",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     NODELET_INFO("simulated rig: %zu cameras %dx%d at %.1f fps, script '%s', %d empty frames, "
-                 "seed %d, encoding %s",
+                 "seed %d, encoding %s%s",
                  rig.cameras.size(), o.width, o.height, o.fps, o.script.c_str(), o.empty_frames,
-                 seed, encoding_.c_str());
+                 seed, encoding_.c_str(),
+                 lockstep_ > 0 ? (", in lockstep with " + lockstep_topic + " (" +
+                                  std::to_string(lockstep_) + " sets in flight)").c_str()
+                               : "");
     running_ = true;
     worker_ = std::thread(&SimRigNodelet::run, this);
+  }
+
+  void onAck(const std_msgs::Header::ConstPtr& h) {
+    {
+      std::lock_guard<std::mutex> lock(ack_mutex_);
+      if (in_flight_.erase(h->stamp) == 0) return;  // not ours, or already given up on
+    }
+    ack_cv_.notify_all();
+  }
+
+  // Lockstep: returns once fewer than lockstep_ frames are in flight (or on timeout).
+  void waitForPipeline(int frame) {
+    const ros::WallTime t0 = ros::WallTime::now();
+    if (frame == 0) {
+      while (running_ && ros::ok() && ack_sub_.getNumPublishers() == 0 &&
+             (ros::WallTime::now() - t0).toSec() < 6 * lockstep_timeout_)
+        ros::WallDuration(0.05).sleep();
+      if (ack_sub_.getNumPublishers() == 0)
+        NODELET_WARN("simulated rig: nothing publishes %s: rendering without lockstep",
+                     ack_sub_.getTopic().c_str());
+      return;
+    }
+    std::unique_lock<std::mutex> lock(ack_mutex_);
+    const bool ok = ack_cv_.wait_for(lock, std::chrono::duration<double>(lockstep_timeout_), [&] {
+      return !running_ || static_cast<int>(in_flight_.size()) < lockstep_;
+    });
+    if (!ok) {
+      NODELET_WARN_THROTTLE(5.0, "simulated rig: no ack on %s for %.1f s: going on without it",
+                            ack_sub_.getTopic().c_str(), lockstep_timeout_);
+      in_flight_.erase(in_flight_.begin());
+      ++lockstep_timeouts_;
+    }
+    lock.unlock();
+    std::lock_guard<std::mutex> stats_lock(mutex_);
+    lockstep_wait_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
   }
 
   void run() {
@@ -121,7 +176,12 @@ class SimRigNodelet : public nodelet::Nodelet {
         NODELET_INFO_ONCE("simulated rig: published all %d frames", max_frames_);
         break;
       }
+      if (lockstep_ > 0) waitForPipeline(frame);
       const ros::Time stamp = ros::Time::now();
+      if (lockstep_ > 0 && ack_sub_.getNumPublishers() > 0) {
+        std::lock_guard<std::mutex> lock(ack_mutex_);
+        in_flight_.insert(stamp);
+      }
       const ros::WallTime t0 = ros::WallTime::now();
       sim::SimFrame f = sim_->render(frame);
       const double render_ms = (ros::WallTime::now() - t0).toSec() * 1e3;
@@ -181,7 +241,10 @@ class SimRigNodelet : public nodelet::Nodelet {
       return;
     }
     const double fps = sim_->options().fps;
-    if (realtime_ && published_ > 0 && rate > 0 && rate < 0.8 * fps)
+    if (lockstep_ > 0 && published_ > 0 && rate > 0 && rate < 0.95 * fps)
+      stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK,
+                    "paced by the pipeline: %.1f of %.1f fps", rate, fps);
+    else if (realtime_ && published_ > 0 && rate > 0 && rate < 0.8 * fps)
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "rendering below %.1f fps", fps);
     else
       stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "rendering");
@@ -190,6 +253,11 @@ class SimRigNodelet : public nodelet::Nodelet {
     stat.add("render time mean (ms)", render_ms_.mean());
     stat.add("render time max (ms)", render_ms_.max());
     stat.add("deadline overruns", overruns_);
+    stat.add("nominal rate (Hz)", fps);
+    if (lockstep_ > 0) {
+      stat.add("lockstep wait mean (ms)", lockstep_wait_ms_.mean());
+      stat.add("lockstep timeouts", lockstep_timeouts_.load());
+    }
   }
 
   std::unique_ptr<sim::SimulatedRig> sim_;
@@ -204,6 +272,14 @@ class SimRigNodelet : public nodelet::Nodelet {
   int max_frames_ = 0;
   double start_delay_ = 1.0;
   bool realtime_ = true;
+  int lockstep_ = 0;
+  double lockstep_timeout_ = 5.0;
+  ros::Subscriber ack_sub_;
+  std::mutex ack_mutex_;  // guards in_flight_
+  std::condition_variable ack_cv_;
+  std::set<ros::Time> in_flight_;  // stamps published and not yet acked
+  std::atomic<uint64_t> lockstep_timeouts_{0};
+  RunningStats lockstep_wait_ms_;  // under mutex_
   std::thread worker_;
   std::atomic<bool> running_{false};
   std::mutex mutex_;
