@@ -20,6 +20,10 @@ Usage: scripts/demo.sh [options] [extra roslaunch arg:=value ...]
   --participants N  1, or 2: a second simulated rig (script reach_targets, seed 2) joins the CVE room
   --port N          port of the CVE room server and its browser client (default 8765)
   --no-cve          no room server, no streaming of the hands
+  --no-lockstep     the simulated rig renders at 25 fps whatever the pipeline does, like real
+                    cameras: when the machine cannot keep up, pSfS drops whole frame sets and
+                    sheds load (the summary says how many). By default the rig waits for the
+                    pipeline and runs at the rate the machine sustains (the summary prints it).
   --browser         also open the room in headless Chromium while the pipeline runs: writes
                     cve_room.png and adds its render rate and capture->render latency to the
                     summary (costs the pipeline CPU time: software WebGL)
@@ -53,6 +57,7 @@ while [ $# -gt 0 ]; do
     --browser) BROWSER=true; shift ;;
     --port) PORT="$2"; shift 2 ;;
     --no-cve) CVE=false; shift ;;
+    --no-lockstep) EXTRA+=("lockstep:=0"); shift ;;
     --rviz) RVIZ=true; shift ;;
     --no-mesh-eval) MESH_EVAL=false; shift ;;
     -h|--help) usage; exit 0 ;;

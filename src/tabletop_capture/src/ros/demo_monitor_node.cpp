@@ -232,7 +232,9 @@ class DemoMonitor {
       exit_code_ = 1;
       done = true;
     } else if (expected_ > 0 && received_ >= expected_) {
-      done = true;
+      // The last sets are still in the later stages: give them a moment.
+      if (all_received_.isZero()) all_received_ = now;
+      done = (now - all_received_).toSec() >= 1.5;
     } else if (received_ > 0 && (now - last_).toSec() > idle_timeout_) {
       std::printf("\n[demo] no frame set for %.0f s: the rig stopped\n", idle_timeout_);
       done = true;
@@ -562,7 +564,7 @@ class DemoMonitor {
   double idle_timeout_ = 5.0, start_timeout_ = 60.0;
   std::string output_dir_;
   bool tty_ = false;
-  ros::WallTime start_, first_, last_, last_print_;
+  ros::WallTime start_, first_, last_, last_print_, all_received_;
   RunningStats latency_ms_;
   tabletop_msgs::MultiViewFrame::ConstPtr sheet_;
   bool sheet_person_ = false, finished_ = false;
