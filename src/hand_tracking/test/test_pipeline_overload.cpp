@@ -50,7 +50,7 @@ TEST(PipelineOverload, DropsWholeSetsAtPsfsOnlyAndEverySetThatGoesOnIsComplete) 
   ros::param::set("/tabletop/sim_rig/start_delay", 1.5);
   ros::param::set("/tabletop/sim_rig/realtime", false);  // as fast as it renders: overload
   ros::param::set("/tabletop/frame_synchronizer/num_cameras", 8);
-  // Live pSfS defaults (queue_size 1, load shedding on); a tracker that answers late on a
+  // Live pSfS defaults (queue_size 2, load shedding on); a tracker that answers late on a
   // starved machine must not make the gate give up on it.
   ros::param::set("/tabletop/psfs/tracker_timeout", 30.0);
 

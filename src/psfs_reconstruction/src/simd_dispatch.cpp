@@ -1,13 +1,21 @@
 #include "psfs_reconstruction/simd_dispatch.h"
 
 #include <atomic>
+#include <cstdlib>
+#include <cstring>
 
 #include "cpu_dispatch.h"
 
 namespace psfs {
 namespace {
-std::atomic<bool> g_force_scalar{false};
-std::atomic<bool> g_force_avx2{false};
+// TABLETOP_SIMD=avx2 or =scalar starts the process with those kernels, e.g. to run the suite or
+// the demo as on a machine without AVX-512 (or without AVX2); the force*() calls override it.
+bool simdEnvIs(const char* value) {
+  const char* e = std::getenv("TABLETOP_SIMD");
+  return e != nullptr && std::strcmp(e, value) == 0;
+}
+std::atomic<bool> g_force_scalar{simdEnvIs("scalar")};
+std::atomic<bool> g_force_avx2{simdEnvIs("avx2")};
 
 bool detectAvx512() {
 #if PSFS_HAVE_X86_DISPATCH

@@ -22,9 +22,10 @@ struct NodeletOptions {
   // background update instead of the volume's back-projection.
   bool foreground_mask_topics = false;
   // Frame sets waiting in the stage's gate (tabletop_capture/pipeline_gate.h): beyond it the
-  // oldest waiting set is dropped (the pipeline's one drop point). Live: 1; offline evaluation:
-  // larger than the recording, so that every set is processed whatever the machine's speed.
-  int queue_size = 1;
+  // oldest waiting set is dropped (the pipeline's one drop point). Live: 2 (a source in
+  // lockstep with up to 2 sets in flight then never loses one to thread timing); offline
+  // evaluation: larger than the recording, so that every set is processed at any speed.
+  int queue_size = 2;
   // Closed loop: after publishing a set's volumes, wait for the tracker's targets with that
   // stamp (on hand_roi_topic) before the next set, so its hand ROIs never depend on timing.
   // Only while the topic has a publisher; at most tracker_timeout seconds per set.

@@ -5,6 +5,8 @@
 // other) CPU.
 #pragma once
 
+// The environment variable TABLETOP_SIMD=avx2 (or =scalar) makes a process start with the AVX2
+// (or scalar) kernels: the suite and the demo then run as on a machine without AVX-512.
 namespace psfs {
 
 // True if the CPU supports AVX2 (and this build has the AVX2 kernels).

@@ -154,9 +154,9 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
     gate_cv_.notify_one();
     for (const auto& d : dropped) {
-      NODELET_WARN_THROTTLE(5.0, "psfs: falling behind the cameras: frame set %.3f dropped "
+      NODELET_WARN_THROTTLE(5.0, "%s: falling behind the cameras: frame set %.3f dropped "
                             "(queue_size %d; the later stages get every set that goes on)",
-                            d->header.stamp.toSec(), cfg_.nodelet.queue_size);
+                            getName().c_str(), d->header.stamp.toSec(), cfg_.nodelet.queue_size);
       publishProcessed(d->header.stamp, "dropped");
     }
   }
@@ -183,20 +183,27 @@ class PsfsNodelet : public nodelet::Nodelet {
     std::unique_lock<std::mutex> lock(gate_mutex_);
     while (running_) {
       const double now = steadySeconds();
-      // A set's `processed` ack waits for the tracker's answer, so a lockstep source counts
-      // the whole closed loop as in flight.
-      if (deferred_processed_ && !gate_.waiting(now)) {
-        const ros::Time stamp = *deferred_processed_;
-        deferred_processed_.reset();
+      std::optional<FramePtr> next;
+      if (outcome_) {
+        // The last set's `processed` ack. A reconstructed set's waits for the tracker's answer,
+        // so a lockstep source counts the whole closed loop as in flight; and the next set is
+        // taken out of the queue before the ack goes, so the set the source sends on it never
+        // finds the queue full.
+        if (gate_.waiting(now)) {
+          gate_cv_.wait_for(lock, std::chrono::duration<double>(gate_.secondsUntilTimeout(now) + 1e-3));
+          continue;
+        }
+        next = gate_.pop(now);
+        const std::pair<ros::Time, std::string> done = *outcome_;
+        outcome_.reset();
         lock.unlock();
-        publishProcessed(stamp, "reconstructed");
+        publishProcessed(done.first, done.second.c_str());
         lock.lock();
-        continue;
+      } else {
+        next = gate_.pop(now);
       }
-      std::optional<FramePtr> next = gate_.pop(now);
       if (!next) {
-        const double wait = gate_.secondsUntilTimeout(now);
-        gate_cv_.wait_for(lock, std::chrono::duration<double>(wait >= 0 ? wait + 1e-3 : 0.2));
+        if (!outcome_) gate_cv_.wait_for(lock, std::chrono::duration<double>(0.2));
         continue;
       }
       const bool shed = shedding_;
@@ -204,6 +211,12 @@ class PsfsNodelet : public nodelet::Nodelet {
       process(*next, shed);
       lock.lock();
     }
+  }
+
+  // The fate of the set being processed; work() publishes it on psfs/processed.
+  void finish(const ros::Time& stamp, const char* what) {
+    std::lock_guard<std::mutex> lock(gate_mutex_);
+    outcome_ = std::make_pair(stamp, std::string(what));
   }
 
   void publishProcessed(const ros::Time& stamp, const char* what) {
@@ -279,7 +292,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     std::string why;
     if (!tabletop_capture::unpackFrameSet(*msg, &rgb, &cams, &why)) {
       reject("frame set " + std::to_string(msg->header.stamp.toSec()) + " dropped: " + why);
-      publishProcessed(msg->header.stamp, "rejected");
+      finish(msg->header.stamp, "rejected");
       return;
     }
     if (!load_tried_ && !cfg_.nodelet.background_load_dir.empty()) {
@@ -306,7 +319,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       r = recon_->process(rgb, cams, centres, currentMasks(*msg));
     } catch (const std::exception& e) {
       reject("frame set " + std::to_string(msg->header.stamp.toSec()) + " dropped: " + e.what());
-      publishProcessed(msg->header.stamp, "rejected");
+      finish(msg->header.stamp, "rejected");
       return;
     }
     for (const auto& w : r.warnings) warnThrottled(w);
@@ -323,7 +336,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       if (r.background_frames == 1 || r.background_frames % 10 == 0)
         NODELET_INFO("psfs: learning the background: %d/%d frame sets", r.background_frames,
                      cfg_.params.background.learning_frames);
-      publishProcessed(msg->header.stamp, "learned");
+      finish(msg->header.stamp, "learned");
       return;
     }
     if (!announced_ready_) {
@@ -336,16 +349,13 @@ class PsfsNodelet : public nodelet::Nodelet {
     for (bool a : r.camera_active) cameras_off_ += !a;
     // Closed loop: the next set waits for the tracker's answer to this one. Noted before the
     // volumes go out, so an ack can never come before the gate expects it.
-    bool deferred = false;
     if (cfg_.nodelet.wait_for_tracker && roi_sub_.getNumPublishers() > 0 &&
         body_pub_.getNumSubscribers() > 0) {
       std::lock_guard<std::mutex> gate_lock(gate_mutex_);
       gate_.expectAck(msg->header.stamp.toNSec(), steadySeconds());
-      deferred_processed_ = msg->header.stamp;  // published by work() once the tracker answered
-      deferred = true;
     }
     publish(*msg, r, rois);
-    if (!deferred) publishProcessed(msg->header.stamp, "reconstructed");
+    finish(msg->header.stamp, "reconstructed");
     const StageTimes& t = r.times;
     classify_ms_.add(t.classify);
     evidence_ms_.add(t.evidence);
@@ -497,7 +507,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   bool running_ = false, background_ready_ = false, shedding_ = false;
   int learning_sets_queued_ = 0;
   std::deque<bool> recent_drops_;
-  std::optional<ros::Time> deferred_processed_;  // reconstructed, waiting for the tracker
+  std::optional<std::pair<ros::Time, std::string>> outcome_;  // for psfs/processed, see work()
   uint64_t shed_counter_ = 0;           // worker thread only
   std::atomic<uint64_t> hands_shed_{0};  // hand volume sets given up by load shedding
   ros::Publisher processed_pub_;

@@ -17,8 +17,9 @@
 //   ~live_status_line  overwrite one status line (terminal) instead of a line every 5 s
 //                      [stdout is a tty]
 //   ~volume_threshold  a voxel is "in the volume" above this probability (the fusion's t)  [0.75]
-//   ~digests       write digests.txt: per frame set the CRC-32 of the body, skin and hand
-//                  volumes and the tracked targets, to compare two runs of one bag    [false]
+//   ~digests       write digests.txt: per frame set what pSfS did with it (psfs/processed),
+//                  the CRC-32 of the body, skin and hand volumes and the tracked targets, to
+//                  compare two runs of one bag                                         [false]
 //
 // The summary also follows a frame set through the stages (sets in and out of each, from
 // their /diagnostics counters), the one place that drops them (pSfS), load shedding, and which
@@ -40,6 +41,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
 
 #include <tabletop_msgs/HandVolumes.h>
 #include <tabletop_msgs/MultiViewFrame.h>
@@ -79,6 +81,12 @@ class DemoMonitor {
             digest_[m->header.stamp]["hands"] = d;
           };
       hands_sub_ = nh_.subscribe<tabletop_msgs::HandVolumes>("psfs/hand_volumes", 300, on_hands);
+      boost::function<void(const std_msgs::Header::ConstPtr&)> on_processed =
+          [this](const std_msgs::Header::ConstPtr& h) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            digest_[h->stamp]["psfs"] = h->frame_id;
+          };
+      processed_sub_ = nh_.subscribe<std_msgs::Header>("psfs/processed", 1000, on_processed);
     }
     for (int k = 0; k < 2; ++k) {
       const std::string kind = k == 0 ? "body" : "skin";
@@ -90,7 +98,7 @@ class DemoMonitor {
       volume_subs_.push_back(
           nh_.subscribe<tabletop_msgs::VoxelVolume>("ground_truth/" + kind + "_volume", 8, on_truth));
     }
-    frames_sub_ = nh_.subscribe("frames", 4, &DemoMonitor::onFrame, this);
+    frames_sub_ = nh_.subscribe("frames", 10, &DemoMonitor::onFrame, this);
     truth_sub_ = nh_.subscribe("ground_truth/targets", 50, &DemoMonitor::onTruth, this);
     tracked_sub_ = nh_.subscribe("hands/targets", 300, &DemoMonitor::onTracked, this);
     diag_sub_ = nh_.subscribe("/diagnostics", 50, &DemoMonitor::onDiagnostics, this);
@@ -333,7 +341,7 @@ class DemoMonitor {
       for (const auto& d : digest_) {
         out << d.first.sec << "." << std::setw(9) << std::setfill('0') << d.first.nsec
             << std::setfill(' ');
-        for (const char* k : {"body", "skin", "targets", "hands"}) {
+        for (const char* k : {"psfs", "body", "skin", "targets", "hands"}) {
           auto it = d.second.find(k);
           if (it != d.second.end()) out << " " << k << " " << it->second;
         }
@@ -344,12 +352,19 @@ class DemoMonitor {
   }
 
   // The last /diagnostics values of the stage whose status name ends with `task`.
+  // Stages of this monitor's own rig (namespace) first: a second participant's pipeline
+  // reports the same tasks under its namespace.
   const std::map<std::string, std::string>* stage(const std::string& task) const {
+    std::string own = nh_.getNamespace();
+    while (!own.empty() && own.front() == '/') own.erase(own.begin());
+    const std::map<std::string, std::string>* any = nullptr;
     for (const auto& st : stages_)
       if (st.first.size() >= task.size() &&
-          st.first.compare(st.first.size() - task.size(), task.size(), task) == 0)
-        return &st.second;
-    return nullptr;
+          st.first.compare(st.first.size() - task.size(), task.size(), task) == 0) {
+        if (!own.empty() && st.first.compare(0, own.size() + 1, own + "/") == 0) return &st.second;
+        if (!any) any = &st.second;
+      }
+    return any;
   }
   static double number(const std::map<std::string, std::string>* st, const std::string& key) {
     if (!st) return std::nan("");
@@ -553,7 +568,7 @@ class DemoMonitor {
   }
 
   ros::NodeHandle nh_, pnh_;
-  ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_, hands_sub_;
+  ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_, hands_sub_, processed_sub_;
   bool digests_ = false;
   std::map<ros::Time, std::map<std::string, std::string>> digest_;
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked_, scored_tracked_;
