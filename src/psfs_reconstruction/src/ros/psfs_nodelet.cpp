@@ -199,12 +199,13 @@ class PsfsNodelet : public nodelet::Nodelet {
         lock.unlock();
         publishProcessed(done.first, done.second.c_str());
         lock.lock();
+        if (!next) continue;  // a set pushed meanwhile is popped at once, not after a wait
       } else {
         next = gate_.pop(now);
-      }
-      if (!next) {
-        if (!outcome_) gate_cv_.wait_for(lock, std::chrono::duration<double>(0.2));
-        continue;
+        if (!next) {  // popped and waited under one lock hold: a push always wakes us
+          gate_cv_.wait_for(lock, std::chrono::duration<double>(0.2));
+          continue;
+        }
       }
       const bool shed = shedding_;
       lock.unlock();
