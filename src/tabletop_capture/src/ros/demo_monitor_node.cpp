@@ -10,6 +10,8 @@
 //
 // Parameters (private):
 //   ~frames        frame sets to wait for before finishing (0 = until Ctrl-C)       [0]
+//   ~hold_file     while this file exists, do not finish after ~frames (at most 120 s more;
+//                  demo.sh --browser keeps the room alive until its browser check is done) [""]
 //   ~idle_timeout  finish when no frame set arrived for this long after the first  [5.0 s]
 //   ~start_timeout give up (exit code 1) if no frame set arrives within this        [60 s]
 //   ~output_dir    where contact_sheet.png and summary.txt go                       [./output]
@@ -59,6 +61,7 @@ class DemoMonitor {
  public:
   DemoMonitor() : pnh_("~") {
     pnh_.param("frames", expected_, 0);
+    pnh_.param("hold_file", hold_file_, std::string());
     pnh_.param("idle_timeout", idle_timeout_, 5.0);
     pnh_.param("start_timeout", start_timeout_, 60.0);
     pnh_.param("output_dir", output_dir_, std::string("output"));
@@ -242,7 +245,14 @@ class DemoMonitor {
     } else if (expected_ > 0 && received_ >= expected_) {
       // The last sets are still in the later stages: give them a moment.
       if (all_received_.isZero()) all_received_ = now;
-      done = (now - all_received_).toSec() >= 1.5;
+      const double since = (now - all_received_).toSec();
+      const bool held = !hold_file_.empty() && ::access(hold_file_.c_str(), F_OK) == 0 && since < 120;
+      if (held && !hold_announced_) {
+        hold_announced_ = true;
+        std::printf("\n[demo] %d frame sets done; going on while %s exists (browser check)\n",
+                    received_, hold_file_.c_str());
+      }
+      done = since >= 1.5 && !held;
     } else if (received_ > 0 && (now - last_).toSec() > idle_timeout_) {
       std::printf("\n[demo] no frame set for %.0f s: the rig stopped\n", idle_timeout_);
       done = true;
@@ -580,6 +590,8 @@ class DemoMonitor {
   std::string output_dir_;
   bool tty_ = false;
   ros::WallTime start_, first_, last_, last_print_, all_received_;
+  std::string hold_file_;
+  bool hold_announced_ = false;
   RunningStats latency_ms_;
   tabletop_msgs::MultiViewFrame::ConstPtr sheet_;
   bool sheet_person_ = false, finished_ = false;
