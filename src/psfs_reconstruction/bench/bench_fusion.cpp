@@ -107,7 +107,9 @@ void BM_Psfs(benchmark::State& st) {
   st.counters["table_MB"] = table.memoryBytes() / 1e6;
   st.SetLabel(table.grid().describe() + (multi ? ", multi-projection" : "") +
               (table.precomputed() ? ", stored table" : ", projected on the fly") +
-              (st.range(2) ? ", scalar" : (avx2Available() ? ", AVX2" : ", scalar (no AVX2)")));
+              (st.range(2) ? ", scalar"
+                           : avx512KernelsActive() ? ", AVX-512"
+                                                   : (avx2Available() ? ", AVX2" : ", scalar (no AVX2)")));
 }
 BENCHMARK(BM_Psfs)
     ->ArgsProduct({{16, 8}, {1, 2}, {0}})
