@@ -162,16 +162,19 @@ except Exception as e:
     sys.exit(0)
 s = r.get('stats') or {}
 lat = s.get('latencyMs') or {}
-c2s = (s.get('captureToServerMs') or {}).get('median', float('nan'))
+def num(x):  # a figure the page could not measure prints as nan
+    return x if isinstance(x, (int, float)) else float('nan')
 rigs = [p for p in s.get('participants', []) if p.get('role') == 'rig']
 print('browser (headless Chromium, software WebGL 960x540): %d participant(s) with %s hands; '
       'render %.1f fps' % (len(rigs), '+'.join(str(p.get('hands', 0)) for p in rigs),
-                           s.get('renderFps', float('nan'))))
+                           num(s.get('renderFps'))))
 print('  capture -> browser render latency median %.0f ms, p95 %.0f ms (capture -> room server '
       '%.0f ms); decode %.1f + mesh %.1f ms per hand in the page' % (
-          lat.get('median', float('nan')), lat.get('p95', float('nan')), c2s,
-          (s.get('decodeMs') or {}).get('mean', float('nan')),
-          (s.get('meshMs') or {}).get('mean', float('nan'))))
+          num(lat.get('median')), num(lat.get('p95')),
+          num((s.get('captureToServerMs') or {}).get('median')),
+          num((s.get('decodeMs') or {}).get('mean')), num((s.get('meshMs') or {}).get('mean'))))
+for note in r.get('notes', []):
+    print('  browser note: ' + note)
 if r.get('failures'):
     print('  browser check: ' + '; '.join(r['failures']))
 PY

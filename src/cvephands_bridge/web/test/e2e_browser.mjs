@@ -220,7 +220,11 @@ try {
     if (!(stats.renderFps >= args.minFps)) {
       result.failures.push(`render rate ${stats.renderFps.toFixed(1)} fps < ${args.minFps}`);
     }
-    if (!(stats.latencyMs.count > 0 && stats.latencyMs.median <= args.maxLatency)) {
+    // No latency sample in the page's 3 s window happens when it renders below ~1 fps (a
+    // starved machine): that is reported, not failed; a measured latency above the bar fails.
+    if (!(stats.latencyMs.count > 0)) {
+      result.notes = (result.notes || []).concat(['no capture->render latency sample in the last 3 s']);
+    } else if (!(stats.latencyMs.median <= args.maxLatency)) {
       result.failures.push(`end-to-end latency median ${stats.latencyMs.median} ms > ${args.maxLatency} ms`);
     }
     for (const p of stats.participants.filter((q) => q.role === 'rig')) {
