@@ -68,10 +68,12 @@ class BrowserEndToEnd(unittest.TestCase):
         def num(x):  # a figure the page could not measure (e.g. no latency sample) prints as -1
             return x if isinstance(x, (int, float)) else -1
         sys.stderr.write(
-            '[browser_e2e] all hands after %.1f s; render %.1f fps; capture->render latency '
+            '[browser_e2e] all hands after %.1f s; render %.1f fps (%.2f over the measuring '
+            'period); capture->render latency '
             'median %.1f ms, p95 %.1f ms (capture->server %.1f ms, server->render %.1f ms); '
             'decode %.2f ms + mesh %.2f ms per hand; screenshot %s\n' % (
-                num(r.get('handsAfterS')), num(r.get('renderFps')), num(lat.get('median')),
+                num(r.get('handsAfterS')), num(r.get('renderFps')),
+                num(r.get('renderFpsMeasured')), num(lat.get('median')),
                 num(lat.get('p95')), num((s.get('captureToServerMs') or {}).get('median')),
                 num((s.get('serverToRenderMs') or {}).get('median')),
                 num((s.get('decodeMs') or {}).get('mean')), num((s.get('meshMs') or {}).get('mean')),

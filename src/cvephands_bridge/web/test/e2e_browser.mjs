@@ -75,7 +75,10 @@ try {
   let lastPrint = 0;
   const ready = (s) => {
     const rigs = s.participants.filter((p) => p.role === 'rig');
-    return rigs.length >= args.participants && rigs.every((p) => p.hands >= args.hands);
+    // Faces too (when expected): a starved machine shows the hands before the first face
+    // picture, and the screenshot's checks need both.
+    return rigs.length >= args.participants &&
+      rigs.every((p) => p.hands >= args.hands && (!args.faces || p.facesShown > 0));
   };
   for (;;) {
     stats = await page.evaluate(() => (window.cve ? window.cve.stats() : null));
@@ -95,7 +98,12 @@ try {
   result.handsAfterS = (Date.now() - t0) / 1000;
   if (!result.failures.length) {
     log(`all hands after ${result.handsAfterS.toFixed(1)} s; measuring for ${args.measure} s`);
+    const m0 = { frames: stats.framesRendered, t: Date.now() };
     await sleep(args.measure * 1000);
+    const m1 = await page.evaluate(() => window.cve.stats());
+    // Frames drawn over the whole measuring period (the page's own figure covers only 3 s, which
+    // holds no frame at all below 0.33 fps).
+    result.renderFpsMeasured = (m1.framesRendered - m0.frames) / ((Date.now() - m0.t) / 1000);
     // Both hands of every participant at one instant (a hand may be lost for a moment).
     const t1 = Date.now();
     let boxes = [];
@@ -110,8 +118,8 @@ try {
       shot = await page.screenshot({ type: 'png' });
       await page.evaluate(() => window.cve.freeze(false));
       if (ready(stats) && boxes.length >= args.participants * args.hands) break;
-      if (Date.now() - t1 > 10000) {
-        result.failures.push('no screenshot with every hand on screen within 10 s');
+      if (Date.now() - t1 > 30000) {
+        result.failures.push('no screenshot with every hand on screen within 30 s');
         break;
       }
       await sleep(200);
@@ -217,8 +225,9 @@ try {
   if (stats) {
     result.renderFps = stats.renderFps;
     result.latencyMs = stats.latencyMs;
-    if (!(stats.renderFps >= args.minFps)) {
-      result.failures.push(`render rate ${stats.renderFps.toFixed(1)} fps < ${args.minFps}`);
+    const fps = Math.max(stats.renderFps, result.renderFpsMeasured || 0);
+    if (!(fps >= args.minFps)) {
+      result.failures.push(`render rate ${fps.toFixed(2)} fps < ${args.minFps}`);
     }
     // No latency sample in the page's 3 s window happens when it renders below ~1 fps (a
     // starved machine): that is reported, not failed; a measured latency above the bar fails.
