@@ -31,9 +31,9 @@ struct NodeletOptions {
   // Only while the topic has a publisher; at most tracker_timeout seconds per set.
   bool wait_for_tracker = true;
   double tracker_timeout = 1.0;
-  // Live load shedding: when more than shed_drop_fraction of the last sets were dropped, hand
-  // volumes are computed on every other set only (reported on /diagnostics), until no set was
-  // dropped for a while. Off for offline evaluation.
+  // Live load shedding: while more than shed_drop_fraction of the recent sets were dropped,
+  // hand volumes are computed on 1 of every 2, then 3, then 4 sets (reported on /diagnostics),
+  // and a step back after a window without drops. Off for offline evaluation.
   bool load_shedding = true;
   double shed_drop_fraction = 0.1;
   std::string background_load_dir;  // load <dir>/<camera>.bgm instead of learning ("" = learn)

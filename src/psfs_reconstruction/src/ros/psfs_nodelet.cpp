@@ -161,22 +161,27 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
   }
 
-  // Called with gate_mutex_ held. Hysteresis: on above the drop fraction, off after a window
-  // without drops.
+  // Called with gate_mutex_ held. Load shedding is a step controller with hysteresis: while
+  // more than shed_drop_fraction of the recent sets are dropped, hand volumes are computed on
+  // one set in 2, then 3, then 4; after a full window without a drop, one step back. Each step
+  // starts a fresh window, so it is judged on what it achieved.
   void updateShedding() {
     if (!cfg_.nodelet.load_shedding) return;
     size_t drops = 0;
     for (bool d : recent_drops_) drops += d;
-    const bool was = shedding_;
+    const int was = shed_every_;
     if (recent_drops_.size() >= kShedWindow / 2 &&
         drops > cfg_.nodelet.shed_drop_fraction * recent_drops_.size())
-      shedding_ = true;
+      shed_every_ = std::min(kMaxShedEvery, shed_every_ + 1);
     else if (drops == 0 && recent_drops_.size() >= kShedWindow)
-      shedding_ = false;
-    if (shedding_ != was)
-      NODELET_WARN("psfs: load shedding %s", shedding_ ? "ON: hand volumes on every other frame set "
-                                                         "only (the machine cannot keep up)"
-                                                       : "off: the machine keeps up again");
+      shed_every_ = std::max(1, shed_every_ - 1);
+    if (shed_every_ == was) return;
+    recent_drops_.clear();
+    if (shed_every_ > 1)
+      NODELET_WARN("psfs: load shedding: hand volumes (and meshes) on 1 of every %d frame sets "
+                   "only: the machine cannot keep up with the cameras", shed_every_);
+    else
+      NODELET_WARN("psfs: load shedding off: the machine keeps up again");
   }
 
   void work() {
@@ -207,9 +212,9 @@ class PsfsNodelet : public nodelet::Nodelet {
           continue;
         }
       }
-      const bool shed = shedding_;
+      const int shed_every = shed_every_;
       lock.unlock();
-      process(*next, shed);
+      process(*next, shed_every);
       lock.lock();
     }
   }
@@ -285,8 +290,9 @@ class PsfsNodelet : public nodelet::Nodelet {
   }
 
   // ---- per frame set --------------------------------------------------------------------
-  // shed: load shedding is on; this set gets hand volumes only if it is an even one.
-  void process(const FramePtr& msg, bool shed) {
+  // shed_every: load shedding's step; this set gets hand volumes only if it is the 1st of
+  // every shed_every sets (1 = every set).
+  void process(const FramePtr& msg, int shed_every) {
     const ros::WallTime t0 = ros::WallTime::now();
     std::vector<cv::Mat> rgb;
     std::vector<tabletop_capture::CameraModel> cams;
@@ -308,7 +314,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       }
     }
     auto rois = currentRois(msg->header.stamp);
-    const bool skip_hands = shed && (shed_counter_++ % 2 == 1);
+    const bool skip_hands = shed_every > 1 && (shed_counter_++ % shed_every != 0);
     if (skip_hands) {
       hands_shed_ += !rois.empty();
       rois.clear();
@@ -442,12 +448,12 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
     tabletop_capture::PipelineGateCounters gate;
     size_t pending = 0;
-    bool shedding = false;
+    int shed_every = 1;
     {
       std::lock_guard<std::mutex> lock(gate_mutex_);
       gate = gate_.counters();
       pending = gate_.pendingCount();
-      shedding = shedding_;
+      shed_every = shed_every_;
     }
     std::lock_guard<std::mutex> lock(stats_mutex_);
     const double rate = rate_.rate(reconstructed_);
@@ -462,9 +468,10 @@ class PsfsNodelet : public nodelet::Nodelet {
                        std::to_string(cfg_.params.background.learning_frames) + ")");
     else if (rejecting)
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "rejecting frame sets: " + last_error_);
-    else if (shedding)
-      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN,
-                   "load shedding: hand volumes on every other frame set (cannot keep up)");
+    else if (shed_every > 1)
+      stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "load shedding: hand volumes on 1 of every %d frame sets (cannot keep up)",
+                    shed_every);
     else if (dropping)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    "dropping frame sets: the machine cannot keep up with the cameras");
@@ -479,7 +486,9 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("frame sets dropped (pipeline busy)", gate.dropped);
     stat.add("drop rate (%)", gate.pushed ? 100.0 * gate.dropped / gate.pushed : 0.0);
     stat.add("frame sets waiting", pending);
-    stat.add("load shedding", shedding ? "on (hand volumes every other set)" : "off");
+    stat.add("load shedding", shed_every > 1 ? "on (hand volumes on 1 of every " +
+                                                   std::to_string(shed_every) + " sets)"
+                                             : std::string("off"));
     stat.add("hand volume sets shed", hands_shed_.load());
     stat.add("tracker acks", gate.acks);
     stat.add("tracker ack timeouts", gate.ack_timeouts);
@@ -496,6 +505,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   }
 
   static constexpr size_t kShedWindow = 50;  // recent sets the shedding decision looks at
+  static constexpr int kMaxShedEvery = 4;     // hand volumes on at least 1 set in 4
 
   ReconstructorConfig cfg_;
   std::unique_ptr<Reconstructor> recon_;
@@ -505,7 +515,8 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::condition_variable gate_cv_;
   tabletop_capture::PipelineGate<FramePtr> gate_;
   std::thread worker_;
-  bool running_ = false, background_ready_ = false, shedding_ = false;
+  bool running_ = false, background_ready_ = false;
+  int shed_every_ = 1;  // load shedding: hand volumes on 1 of every shed_every_ sets
   int learning_sets_queued_ = 0;
   std::deque<bool> recent_drops_;
   std::optional<std::pair<ros::Time, std::string>> outcome_;  // for psfs/processed, see work()
