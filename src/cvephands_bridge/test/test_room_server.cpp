@@ -290,6 +290,9 @@ void expectHands(Inbox& to, uint32_t sender, size_t total) {
 void twoRigsExchangeHands(int threads) {
   RoomServerOptions o = loopback();
   o.threads = threads;
+  // Every message must arrive however slow this machine runs the clients: a queue longer than
+  // the whole exchange (dropping for slow receivers has tests of its own).
+  o.queue_length = 1000;
   RoomServer server(o);
   server.start();
   ASSERT_NE(server.port(), 0);
