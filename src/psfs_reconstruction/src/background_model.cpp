@@ -29,6 +29,12 @@ struct FileHeader {
 };
 static_assert(sizeof(FileHeader) == 40, "FileHeader must have no padding");
 
+// Unbiased sample variance from the learning sums of n frames (sum s, sum of squares s2); 0 for
+// fewer than 2 frames.
+double sampleVariance(double s, double s2, double n) {
+  return n > 1 ? std::max(0.0, (s2 - s * s / n) / (n - 1.0)) : 0.0;
+}
+
 void validateParams(const BackgroundModelParams& p) {
   if (p.learning_frames < 2)
     throw std::invalid_argument("background model: learning_frames must be >= 2");
@@ -152,7 +158,7 @@ double BackgroundModel::changedFraction(const cv::Mat& rgb) const {
   const double floor_i2 = 4.0 * params_.min_sigma_intensity * params_.min_sigma_intensity;
   // rg of dark pixels is mostly noise (a 2-level error at I = 10 moves r by 0.07).
   constexpr float kMinChromaIntensity = 40.0f;
-  auto var = [n](double s, double s2) { return n > 1 ? std::max(0.0, (s2 - s * s / n) / (n - 1.0)) : 0.0; };
+  auto var = [n](double s, double s2) { return sampleVariance(s, s2, n); };
   std::vector<float> r(width_), g(width_), in(width_);
   std::size_t changed = 0;
   for (int y = 0; y < height_; ++y) {
@@ -185,7 +191,7 @@ void BackgroundModel::finalizeLearning() {
   const double n = frames_;
   const float fr = params_.min_sigma_rg * params_.min_sigma_rg;
   const float fi = params_.min_sigma_intensity * params_.min_sigma_intensity;
-  auto var = [n](double s, double s2) { return std::max(0.0, (s2 - s * s / n) / (n - 1.0)); };
+  auto var = [n](double s, double s2) { return sampleVariance(s, s2, n); };
   for (std::size_t i = 0; i < mean_r_.size(); ++i) {
     mean_r_[i] = float(sum_[0][i] / n);
     mean_g_[i] = float(sum_[1][i] / n);

@@ -184,8 +184,7 @@ Reconstructor::LearningVerdict Reconstructor::checkLearningFrame(
     warnings->push_back("the scene differed from the first " + std::to_string(learned) +
                         " learned frame sets for " + std::to_string(learning_skips_) +
                         " sets: learning the background again from scratch");
-    resetBackground();
-    learning_skips_ = 0;
+    resetBackground();  // (and the count of skips)
   }
   return LearningVerdict::kSkip;
 }

@@ -97,7 +97,7 @@ class DemoMonitor {
           [this, k](const tabletop_msgs::VoxelVolume::ConstPtr& m) { onVolume(k, false, m); };
       boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_truth =
           [this, k](const tabletop_msgs::VoxelVolume::ConstPtr& m) { onVolume(k, true, m); };
-      volume_subs_.push_back(nh_.subscribe<tabletop_msgs::VoxelVolume>("psfs/" + kind + "_volume", 8, on_rec));
+      volume_subs_.push_back(nh_.subscribe<tabletop_msgs::VoxelVolume>("psfs/" + kind + "_volume", 300, on_rec));
       volume_subs_.push_back(
           nh_.subscribe<tabletop_msgs::VoxelVolume>("ground_truth/" + kind + "_volume", 8, on_truth));
     }
@@ -129,7 +129,6 @@ class DemoMonitor {
     }
   }
 
-  // Tracker output and truth are paired by stamp, whichever arrives first.
   static std::string crcOf(const std::vector<uint8_t>& data) {
     boost::crc_32_type crc;
     crc.process_bytes(data.data(), data.size());
@@ -138,6 +137,7 @@ class DemoMonitor {
     return buf;
   }
 
+  // Tracker output and truth are paired by stamp, whichever arrives first.
   void onTracked(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (digests_) {
