@@ -9,12 +9,12 @@
 
 #include "cvephands_bridge/mesh_components.h"
 #include "cvephands_bridge/sim_hand_volumes.h"
-#include "tabletop_capture/sim/surface_samples.h"
+#include "tabletop_sim/surface_samples.h"
 
 namespace cvephands {
 namespace {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -54,9 +54,9 @@ MeshAccuracy score(const TriangleMesh& mesh, const sim::SurfaceSamples& truth,
   return a;
 }
 
-void addStats(const MeshAccuracy& a, tabletop_capture::RunningStats* m2t,
-              tabletop_capture::RunningStats* t2m, tabletop_capture::RunningStats* p95m2t,
-              tabletop_capture::RunningStats* p95t2m) {
+void addStats(const MeshAccuracy& a, tabletop_common::RunningStats* m2t,
+              tabletop_common::RunningStats* t2m, tabletop_common::RunningStats* p95m2t,
+              tabletop_common::RunningStats* p95t2m) {
   if (a.mesh_to_truth.count) m2t->add(a.mesh_to_truth.mean_mm), p95m2t->add(a.mesh_to_truth.p95_mm);
   if (a.truth_to_mesh.count) t2m->add(a.truth_to_mesh.mean_mm), p95t2m->add(a.truth_to_mesh.p95_mm);
 }

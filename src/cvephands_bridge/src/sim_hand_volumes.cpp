@@ -9,7 +9,7 @@ namespace cvephands {
 
 void visitSimHandFrames(const SimHandVolumeOptions& o,
                         const std::function<void(const SimHandFrame&)>& visit) {
-  namespace sim = tabletop_capture::sim;
+  namespace sim = tabletop_sim;
   if (o.first_frame < 0 || o.frames < 0)
     throw std::invalid_argument("visitSimHandFrames: first_frame and frames must be >= 0");
   if (o.every < 1) throw std::invalid_argument("visitSimHandFrames: every must be >= 1");

@@ -19,13 +19,13 @@
 #include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/room_client.h"
 #include "cvephands_bridge/room_server.h"
-#include "tabletop_capture/ros/test_support.h"
+#include "tabletop_common/ros/test_support.h"
 
 namespace {
 
-using tabletop_capture::test_support::loadNodelet;
-using tabletop_capture::test_support::loader;
-using tabletop_capture::test_support::waitFor;
+using tabletop_common::test_support::loadNodelet;
+using tabletop_common::test_support::loader;
+using tabletop_common::test_support::waitFor;
 
 }  // namespace
 
@@ -44,7 +44,7 @@ TEST(CveBridge, StreamsHandsIntoTheRoom) {
   ros::param::set("/tabletop/cve_bridge/reconnect_interval", 0.2);
 
   std::mutex m;
-  tabletop_capture::test_support::DiagnosticsValues diag("cve bridge");
+  tabletop_common::test_support::DiagnosticsValues diag("cve bridge");
   ros::Publisher pub = nh.advertise<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 5);
   ASSERT_TRUE(loadNodelet("/tabletop/cve_bridge", "cvephands_bridge/CveBridge"));
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }, 10.0));
@@ -146,5 +146,5 @@ TEST(CveBridge, StreamsHandsIntoTheRoom) {
 }
 
 int main(int argc, char** argv) {
-  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_cve_bridge", 2);
+  return tabletop_common::test_support::runNodeletTests(argc, argv, "test_cve_bridge", 2);
 }

@@ -7,14 +7,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cvephands_bridge/face_video.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace cvephands {
 namespace {
 
-using tabletop_capture::sim::SimFrame;
-using tabletop_capture::sim::SimOptions;
-using tabletop_capture::sim::SimulatedRig;
+using tabletop_sim::SimFrame;
+using tabletop_sim::SimOptions;
+using tabletop_sim::SimulatedRig;
 
 // Skin as the renderer draws it under the rig's lights: red-dominant, warm.
 bool skinLike(const cv::Vec3b& p) { return p[0] > 90 && p[0] > p[1] && p[1] > p[2] && p[0] - p[2] > 25; }

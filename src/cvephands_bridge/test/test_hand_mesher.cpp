@@ -19,13 +19,13 @@
 #include <tabletop_msgs/HandVolumes.h>
 
 #include "ball_volume.h"
-#include "tabletop_capture/ros/test_support.h"
+#include "tabletop_common/ros/test_support.h"
 
 namespace {
 
-using tabletop_capture::test_support::loadNodelet;
-using tabletop_capture::test_support::loader;
-using tabletop_capture::test_support::waitFor;
+using tabletop_common::test_support::loadNodelet;
+using tabletop_common::test_support::loader;
+using tabletop_common::test_support::waitFor;
 
 constexpr int kN = 83;             // voxels per side, as the pipeline's hand volumes
 constexpr double kVoxel = 0.30 / kN;
@@ -54,7 +54,7 @@ TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
       };
   auto s1 = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 10, on_meshes);
   auto s2 = nh.subscribe<visualization_msgs::MarkerArray>("/tabletop/cve/hand_meshes", 10, on_markers);
-  tabletop_capture::test_support::DiagnosticsValues diag("hand meshing");
+  tabletop_common::test_support::DiagnosticsValues diag("hand meshing");
   ros::Publisher pub = nh.advertise<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 5);
   ASSERT_TRUE(loadNodelet("/tabletop/hand_mesher", "cvephands_bridge/HandMesher"));
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && s1.getNumPublishers() > 0 &&
@@ -152,5 +152,5 @@ TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
 }
 
 int main(int argc, char** argv) {
-  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_hand_mesher", 2);
+  return tabletop_common::test_support::runNodeletTests(argc, argv, "test_hand_mesher", 2);
 }

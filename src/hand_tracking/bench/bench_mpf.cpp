@@ -16,12 +16,12 @@
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
 #include "psfs_reconstruction/reconstructor.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace hand_tracking {
 namespace {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 
 struct Frames {
   std::vector<psfs::ProbabilityVolume> skin, body;

@@ -14,11 +14,11 @@
 #include "psfs_reconstruction/gaussian_mixture.h"
 #include "psfs_reconstruction/probability_volume.h"
 #include "psfs_reconstruction/reconstructor.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace hand_tracking_test {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 
 constexpr int kLearnFrames = 25;  // empty frames the background model learns from
 

@@ -18,19 +18,19 @@
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
 
-#include "tabletop_capture/ros/sim_truth_msgs.h"
-#include "tabletop_capture/ros/test_support.h"
-#include "tabletop_capture/sim/tracking_evaluator.h"
+#include "tabletop_sim/ros/sim_truth_msgs.h"
+#include "tabletop_common/ros/test_support.h"
+#include "tabletop_sim/tracking_evaluator.h"
 
 namespace {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 constexpr int kFrames = 125;  // 25 empty + 100 with the person (4 s of reaching)
 constexpr int kEmpty = 25;
 
-using tabletop_capture::test_support::loadNodelet;
-using tabletop_capture::test_support::loader;
-using tabletop_capture::test_support::waitFor;
+using tabletop_common::test_support::loadNodelet;
+using tabletop_common::test_support::loader;
+using tabletop_common::test_support::waitFor;
 
 }  // namespace
 
@@ -76,8 +76,8 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   auto s1 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/hands/targets", 300, on_tracked);
   auto s2 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 300, on_truth);
   auto s3 = nh.subscribe<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 300, on_hands);
-  tabletop_capture::test_support::DiagnosticsValues diag("mpf hand tracking");
-  tabletop_capture::test_support::DiagnosticsValues psfs_diag("psfs reconstruction");
+  tabletop_common::test_support::DiagnosticsValues diag("mpf hand tracking");
+  tabletop_common::test_support::DiagnosticsValues psfs_diag("psfs reconstruction");
   auto s5 = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 300, on_meshes);
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
@@ -86,7 +86,7 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   ASSERT_TRUE(loadNodelet("/tabletop/mpf", "hand_tracking/Mpf"));
   ASSERT_TRUE(loadNodelet("/tabletop/psfs", "psfs_reconstruction/Psfs"));
   ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
-  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
+  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_sim/SimRig"));
 
   // Generous limits: a quarter of a slow machine's CPU takes ~1 s per set.
   ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return truth.size() >= size_t(kFrames); }, 280.0));
@@ -101,8 +101,8 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
   sim::TrackingEvaluator ev;
   for (const auto& t : tracked) {
     auto g = truth.find(t.first);
-    if (g != truth.end()) ev.add(t.first.toSec(), tabletop_capture::toTrackedPoints(*t.second),
-                             tabletop_capture::toTruthPoints(*g->second));
+    if (g != truth.end()) ev.add(t.first.toSec(), tabletop_sim::toTrackedPoints(*t.second),
+                             tabletop_sim::toTruthPoints(*g->second));
   }
   std::printf("[mpf]\n%s", ev.summary().c_str());
   // test_mpf_sim measures ~9 mm (hands) and ~11 mm (head) on this script in process; here the
@@ -171,5 +171,5 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
 }
 
 int main(int argc, char** argv) {
-  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_mpf_pipeline", 4);
+  return tabletop_common::test_support::runNodeletTests(argc, argv, "test_mpf_pipeline", 4);
 }

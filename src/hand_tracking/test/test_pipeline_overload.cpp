@@ -20,15 +20,15 @@
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
 
-#include "tabletop_capture/ros/test_support.h"
+#include "tabletop_common/ros/test_support.h"
 
 namespace {
 
 constexpr int kFrames = 150;  // 25 empty + 125 with the person
 constexpr int kEmpty = 25;
 
-using tabletop_capture::test_support::loadNodelet;
-using tabletop_capture::test_support::waitFor;
+using tabletop_common::test_support::loadNodelet;
+using tabletop_common::test_support::waitFor;
 
 template <typename M>
 boost::function<void(const typename M::ConstPtr&)> record(std::mutex* m,
@@ -81,13 +81,13 @@ TEST(PipelineOverload, DropsWholeSetsAtPsfsOnlyAndEverySetThatGoesOnIsComplete) 
         person[t->header.stamp] = any;
       };
   auto s7 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 1000, on_truth);
-  tabletop_capture::test_support::DiagnosticsValues diag("psfs reconstruction");
+  tabletop_common::test_support::DiagnosticsValues diag("psfs reconstruction");
 
   ASSERT_TRUE(loadNodelet("/tabletop/hand_mesher", "cvephands_bridge/HandMesher"));
   ASSERT_TRUE(loadNodelet("/tabletop/mpf", "hand_tracking/Mpf"));
   ASSERT_TRUE(loadNodelet("/tabletop/psfs", "psfs_reconstruction/Psfs"));
   ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
-  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
+  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_sim/SimRig"));
 
   // Every set the synchroniser published is acknowledged by pSfS (learned, reconstructed or
   // dropped); then the last targets and meshes, and a diagnostics round.
@@ -141,5 +141,5 @@ TEST(PipelineOverload, DropsWholeSetsAtPsfsOnlyAndEverySetThatGoesOnIsComplete) 
 }
 
 int main(int argc, char** argv) {
-  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_pipeline_overload", 4);
+  return tabletop_common::test_support::runNodeletTests(argc, argv, "test_pipeline_overload", 4);
 }

@@ -23,12 +23,12 @@
 #include "../test/fusion_test_utils.h"
 #include "psfs_reconstruction/binary_sfs.h"
 #include "psfs_reconstruction/psfs_fusion.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace {
 
 using namespace psfs;
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 using Clock = std::chrono::steady_clock;
 
 template <class F>

@@ -14,13 +14,13 @@
 #include "psfs_reconstruction/binary_sfs.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/simd_dispatch.h"
-#include "tabletop_capture/sim/default_rig.h"
+#include "tabletop_capture/default_rig.h"
 
 namespace psfs {
 namespace {
 
 struct Workload {
-  tabletop_capture::RigDescription rig = tabletop_capture::sim::makeDefaultRig();
+  tabletop_capture::RigDescription rig = tabletop_capture::makeDefaultRig();
   std::vector<test::Sphere> person = {
       {Eigen::Vector3d(0.0, -0.35, 0.35), 0.17},   // torso
       {Eigen::Vector3d(0.0, -0.35, 0.62), 0.10},   // head

@@ -13,7 +13,7 @@
 #include "psfs_reconstruction/probability_volume.h"
 #include "psfs_reconstruction/view_evidence.h"
 #include "tabletop_capture/camera_model.h"
-#include "tabletop_capture/sim/default_rig.h"
+#include "tabletop_capture/default_rig.h"
 
 namespace psfs {
 namespace test {
@@ -37,7 +37,7 @@ inline std::vector<tabletop_capture::CameraModel> ringCameras(int n, const Eigen
     c.width = width, c.height = height;
     c.fx = f, c.fy = f;
     c.cx = (width - 1) / 2.0, c.cy = (height - 1) / 2.0;
-    c.world_T_camera = tabletop_capture::sim::lookAt(
+    c.world_T_camera = tabletop_capture::lookAt(
         target + Eigen::Vector3d(radius * std::cos(az), radius * std::sin(az), h), target);
     cams.push_back(c);
   }

@@ -13,12 +13,12 @@
 #include "fusion_test_utils.h"
 #include "psfs_reconstruction/binary_sfs.h"
 #include "psfs_reconstruction/psfs_fusion.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace psfs {
 namespace {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 
 struct Truth {
   std::vector<uint8_t> person, skin;

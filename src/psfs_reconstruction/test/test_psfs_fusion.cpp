@@ -16,7 +16,7 @@
 #include "psfs_reconstruction/binary_sfs.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/simd_dispatch.h"
-#include "tabletop_capture/sim/default_rig.h"
+#include "tabletop_capture/default_rig.h"
 
 namespace psfs {
 namespace {
@@ -132,7 +132,7 @@ TEST(VoxelGrid, ReferenceResolutionsAndIndexing) {
 }
 
 TEST(ProjectionTable, MatchesCameraModelWithDistortion) {
-  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  const auto rig = tabletop_capture::makeDefaultRig();
   const VoxelGrid grid = referenceGrid(Resolution::k16mm);
   ProjectionTableOptions o;
   o.multi_projection = true;
@@ -272,7 +272,7 @@ TEST(PsfsFusion, SphereMatchesAnalyticVisualHull) {
 
 TEST(PsfsFusion, MultiProjectionOnDefaultRigAt16mm) {
   // The design's configuration: 8 distorted 320x240 cameras, 64x64x48, multi-projection.
-  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  const auto rig = tabletop_capture::makeDefaultRig();
   const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.05, -0.02, 0.35), 0.15}};
   std::vector<cv::Mat> images;
   for (const auto& c : rig.cameras) images.push_back(test::sphereLikelihood(c, spheres, kIn, kOut));
@@ -578,7 +578,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
   if (!avx2Available()) {
     GTEST_SKIP() << "no AVX2 on this CPU: only the scalar kernels exist";
   }
-  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  const auto rig = tabletop_capture::makeDefaultRig();
   const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2},
                                        {Eigen::Vector3d(0.2, 0.1, 0.5), 0.08}};
   std::vector<ViewImage> views;
@@ -637,7 +637,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
 // per voxel (each face from the table and the likelihood bytes directly) against the walk the
 // reference variants use, on a rig where one camera sees only part of the grid.
 TEST(PsfsFusion, FaceSamplesFollowTheSharingRule) {
-  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  const auto rig = tabletop_capture::makeDefaultRig();
   auto cams = rig.cameras;
   cams[1].fx *= 2.5;
   cams[1].fy *= 2.5;
@@ -725,7 +725,7 @@ TEST(PsfsFusion, FaceSamplesFollowTheSharingRule) {
 // must be identical to the bit (volumes then agree across CPUs with either extension).
 TEST(ProjectionTable, Avx512AndAvx2ProjectionsAreIdentical) {
   if (!avx512Available()) GTEST_SKIP() << "no AVX-512 on this CPU: only the AVX2 projection runs";
-  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  const auto rig = tabletop_capture::makeDefaultRig();
   ProjectionTableOptions o;
   o.multi_projection = true;
   o.storage = TableStorage::kPrecomputed;
@@ -741,7 +741,7 @@ TEST(ProjectionTable, Avx512AndAvx2ProjectionsAreIdentical) {
 }
 
 TEST(PsfsFusion, HandSubVolumeOnTheFlyEqualsPrecomputed) {
-  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  const auto rig = tabletop_capture::makeDefaultRig();
   const std::vector<Sphere> hand = {{Eigen::Vector3d(0.12, -0.05, 0.3), 0.05}};
   std::vector<cv::Mat> imgs;
   for (const auto& c : rig.cameras) imgs.push_back(test::sphereLikelihood(c, hand, kIn, kOut));
@@ -765,7 +765,7 @@ TEST(PsfsFusion, NoisyLikelihoodsBeatBinarySfs) {
   // Classifier noise: Gaussian (sigma 50 grey levels) and 3 % outlier pixels. pSfS averages
   // the evidence in the log domain (and the multi-projection median suppresses single bad
   // pixels); binary SfS lets any one bad pixel carve a hole.
-  const auto rig = tabletop_capture::sim::makeDefaultRig();
+  const auto rig = tabletop_capture::makeDefaultRig();
   const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.35), 0.16},
                                        {Eigen::Vector3d(0.25, 0.1, 0.3), 0.06}};
   std::vector<cv::Mat> clean, noisy;

@@ -22,19 +22,19 @@
 #include <tabletop_msgs/VoxelVolume.h>
 
 #include "psfs_reconstruction/ros/volume_msgs.h"
-#include "tabletop_capture/ros/test_support.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_common/ros/test_support.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 
 constexpr int kFrames = 70;
 constexpr int kEmpty = 25;
 
-using tabletop_capture::test_support::loadNodelet;
-using tabletop_capture::test_support::loader;
-using tabletop_capture::test_support::waitFor;
+using tabletop_common::test_support::loadNodelet;
+using tabletop_common::test_support::loader;
+using tabletop_common::test_support::waitFor;
 
 }  // namespace
 
@@ -96,11 +96,11 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   auto s3 = nh.subscribe<tabletop_msgs::VoxelVolume>("/tabletop/psfs/skin_volume", 200, on_skin);
   auto s4 = nh.subscribe<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 200, on_hands);
   auto s5 = nh.subscribe<tabletop_msgs::TrackedTargets>("/tabletop/ground_truth/targets", 200, on_truth);
-  tabletop_capture::test_support::DiagnosticsValues diag("psfs reconstruction");
+  tabletop_common::test_support::DiagnosticsValues diag("psfs reconstruction");
 
   ASSERT_TRUE(loadNodelet("/tabletop/psfs", "psfs_reconstruction/Psfs"));
   ASSERT_TRUE(loadNodelet("/tabletop/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
-  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_capture/SimRig"));
+  ASSERT_TRUE(loadNodelet("/tabletop/sim_rig", "tabletop_sim/SimRig"));
 
   ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return frame_stamps.size() >= size_t(kFrames); }, 280.0));
   // The queued sets, then a diagnostics round.
@@ -204,5 +204,5 @@ TEST(PsfsPipeline, SimRigToVolumes) {
 }
 
 int main(int argc, char** argv) {
-  return tabletop_capture::test_support::runNodeletTests(argc, argv, "test_psfs_pipeline", 4);
+  return tabletop_common::test_support::runNodeletTests(argc, argv, "test_psfs_pipeline", 4);
 }

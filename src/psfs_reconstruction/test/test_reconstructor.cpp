@@ -15,14 +15,14 @@
 
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/reconstructor_config.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 #include "expect_throw.h"
 #include "test_data_path.h"
 
 namespace psfs {
 namespace {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 namespace fs = std::filesystem;
 
 constexpr int kLearn = 25;  // empty frames the rig renders and the model learns from

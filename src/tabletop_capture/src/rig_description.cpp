@@ -182,7 +182,7 @@ RigDescription loadRigYaml(const std::string& path) {
 std::string rigToYaml(const RigDescription& rig) {
   std::ostringstream s;
   s << std::setprecision(17);
-  s << "# Rig description: see tabletop_capture/config/sim_rig.yaml for the format.\n";
+  s << "# Rig description: see tabletop_sim/config/sim_rig.yaml for the format.\n";
   s << "rig: " << quoted(rig.name) << "\n";
   s << "world_frame: " << quoted(rig.world_frame) << "\n";
   s << "cameras:\n";

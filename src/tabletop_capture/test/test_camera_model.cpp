@@ -13,7 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "tabletop_capture/camera_model.h"
-#include "tabletop_capture/sim/default_rig.h"
+#include "tabletop_capture/default_rig.h"
 
 using namespace tabletop_capture;
 
@@ -92,7 +92,7 @@ std::vector<Sample> coveringSamples(const CameraModel& cam) {
 
 // A camera looking at the workspace with the given plumb_bob coefficients.
 CameraModel strongCamera(const std::array<double, 5>& d, int index) {
-  CameraModel cam = sim::makeDefaultRig().cameras.at(index % 8);
+  CameraModel cam = makeDefaultRig().cameras.at(index % 8);
   cam.name = "strong" + std::to_string(index);
   cam.distortion = d;
   return cam;
@@ -102,7 +102,7 @@ CameraModel strongCamera(const std::array<double, 5>& d, int index) {
 // (k1 = -0.3 alone folds over before the image corners at fx ~ 232 px on 320x240, i.e. the
 // corners are images of no point; with k2 = 0.1 the model is monotonic there.)
 std::vector<CameraModel> comparisonCameras() {
-  std::vector<CameraModel> cams = sim::makeDefaultRig().cameras;
+  std::vector<CameraModel> cams = makeDefaultRig().cameras;
   const std::array<double, 5> strong[] = {
       {{-0.3, 0.1, 0.0, 0.0, 0.0}},          // strong barrel
       {{0.3, 0.0, 0.0, 0.0, 0.0}},           // strong pincushion
@@ -128,7 +128,7 @@ std::string camDesc(const CameraModel& c) {
 
 // Kept from the original file.
 TEST(CameraModel, DefaultRigRoundTrip) {
-  const RigDescription rig = sim::makeDefaultRig();
+  const RigDescription rig = makeDefaultRig();
   ASSERT_EQ(rig.cameras.size(), 8u);
   for (const auto& cam : rig.cameras) {
     const Eigen::Vector3d p(0.1, -0.1, 0.3);
@@ -278,7 +278,7 @@ TEST(CameraModel, NoDistortion) {
   cam.fy = 510;
   cam.cx = 319.5;
   cam.cy = 241.25;
-  cam.world_T_camera = sim::lookAt(Eigen::Vector3d(1.0, -0.7, 1.2), Eigen::Vector3d(0, 0, 0.3));
+  cam.world_T_camera = lookAt(Eigen::Vector3d(1.0, -0.7, 1.2), Eigen::Vector3d(0, 0, 0.3));
   EXPECT_FALSE(cam.hasDistortion());
   const Eigen::Vector2d xn(0.3, -0.2);
   EXPECT_EQ(cam.distort(xn), xn);
@@ -311,7 +311,7 @@ TEST(CameraModel, NoDistortion) {
 }
 
 TEST(CameraModel, PoseConventions) {
-  const CameraModel cam = sim::makeDefaultRig().cameras[3];
+  const CameraModel cam = makeDefaultRig().cameras[3];
   EXPECT_TRUE((cam.cameraTWorld() * cam.world_T_camera).matrix().isIdentity(1e-12));
   // The optical axis (+z camera) from the centre projects to the principal point.
   const Eigen::Vector3d on_axis = cam.world_T_camera * Eigen::Vector3d(0, 0, 2.0);
@@ -327,7 +327,7 @@ TEST(CameraModel, PoseConventions) {
 }
 
 TEST(DefaultRig, EveryCameraSeesWorkspaceCentreAndBoxCorners) {
-  const RigDescription rig = sim::makeDefaultRig();
+  const RigDescription rig = makeDefaultRig();
   ASSERT_EQ(rig.cameras.size(), 8u);
   const Eigen::Vector3d lo(-0.5, -0.5, 0.0), hi(0.5, 0.5, 0.75);
   std::vector<Eigen::Vector3d> pts = {Eigen::Vector3d(0, 0, 0.375)};
@@ -362,9 +362,9 @@ TEST(DefaultRig, EveryCameraSeesWorkspaceCentreAndBoxCorners) {
 
 TEST(DefaultRig, Options) {
   for (int n = 1; n <= 16; ++n) {
-    sim::DefaultRigOptions o;
+    DefaultRigOptions o;
     o.num_cameras = n;
-    const RigDescription rig = sim::makeDefaultRig(o);
+    const RigDescription rig = makeDefaultRig(o);
     ASSERT_EQ(rig.cameras.size(), size_t(n));
     for (const auto& c : rig.cameras) {
       const Eigen::Matrix3d R = c.world_T_camera.linear();
@@ -372,11 +372,11 @@ TEST(DefaultRig, Options) {
       EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
     }
   }
-  sim::DefaultRigOptions o;
+  DefaultRigOptions o;
   o.distortion = false;
-  for (const auto& c : sim::makeDefaultRig(o).cameras) EXPECT_FALSE(c.hasDistortion());
+  for (const auto& c : makeDefaultRig(o).cameras) EXPECT_FALSE(c.hasDistortion());
   o.num_cameras = 0;
-  EXPECT_THROW(sim::makeDefaultRig(o), std::invalid_argument);
+  EXPECT_THROW(makeDefaultRig(o), std::invalid_argument);
   o.num_cameras = 17;
-  EXPECT_THROW(sim::makeDefaultRig(o), std::invalid_argument);
+  EXPECT_THROW(makeDefaultRig(o), std::invalid_argument);
 }

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "tabletop_capture/rig_description.h"
-#include "tabletop_capture/sim/default_rig.h"
+#include "tabletop_capture/default_rig.h"
 
 using namespace tabletop_capture;
 namespace fs = std::filesystem;
@@ -206,7 +206,7 @@ TEST(RigYaml, OptionalFieldsDefault) {
 }
 
 TEST(RigYaml, RoundTripDefaultRig) {
-  const RigDescription rig = sim::makeDefaultRig();
+  const RigDescription rig = makeDefaultRig();
   const RigDescription back = parseRigYaml(rigToYaml(rig), "roundtrip.yaml");
   expectSameRig(rig, back, 1e-12);
 }
@@ -224,7 +224,7 @@ TEST(RigYaml, SaveAndLoadThroughFile) {
   TempFile f("save");
   saveRigYaml(rig, f.path());
   expectSameRig(rig, loadRigYaml(f.path()), 1e-12);
-  const RigDescription def = sim::makeDefaultRig();
+  const RigDescription def = makeDefaultRig();
   saveRigYaml(def, f.path());  // overwrite
   expectSameRig(def, loadRigYaml(f.path()), 1e-12);
 }
@@ -232,7 +232,7 @@ TEST(RigYaml, SaveAndLoadThroughFile) {
 TEST(RigYaml, SaveToUnwritablePathThrows) {
   const std::string path = "/nonexistent_dir_tabletop_test/sub/rig.yaml";
   try {
-    saveRigYaml(sim::makeDefaultRig(), path);
+    saveRigYaml(makeDefaultRig(), path);
     FAIL() << "no RigError";
   } catch (const RigError& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
@@ -247,7 +247,7 @@ TEST(RigYaml, RoundTripNamesWithYamlSpecialCharacters) {
       [](RigDescription* r) { r->cameras[1].name = "[cam1]"; },           // flow sequence
   };
   for (const auto& edit : edits) {
-    RigDescription rig = sim::makeDefaultRig(sim::DefaultRigOptions{2, 320, 240, true});
+    RigDescription rig = makeDefaultRig(DefaultRigOptions{2, 320, 240, true});
     edit(&rig);
     SCOPED_TRACE("rig '" + rig.name + "', frame_id '" + rig.cameras[0].frame_id + "', name '" +
                  rig.cameras[1].name + "'");
@@ -260,7 +260,7 @@ TEST(RigYaml, RoundTripNamesWithYamlSpecialCharacters) {
 }
 
 TEST(RigYaml, DefaultRigCamerasValidate) {
-  const RigDescription rig = sim::makeDefaultRig();
+  const RigDescription rig = makeDefaultRig();
   for (size_t i = 0; i < rig.cameras.size(); ++i)
     EXPECT_NO_THROW(validateCamera(rig.cameras[i], "default", static_cast<int>(i)));
 }
@@ -459,7 +459,7 @@ TEST(RigYaml, MissingFile) {
 // ---- validateCamera in memory -------------------------------------------------------------
 
 TEST(ValidateCamera, NamesSourceCameraIndexAndField) {
-  const CameraModel good = sim::makeDefaultRig().cameras[2];
+  const CameraModel good = makeDefaultRig().cameras[2];
   struct Case {
     const char* field;
     std::function<void(CameraModel*)> mutate;

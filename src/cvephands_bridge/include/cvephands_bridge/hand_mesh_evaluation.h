@@ -21,7 +21,7 @@
 #include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/mesh_accuracy.h"
 #include "cvephands_bridge/triangle_mesh.h"
-#include "tabletop_capture/running_stats.h"
+#include "tabletop_common/running_stats.h"
 
 namespace cvephands {
 
@@ -58,7 +58,7 @@ struct HandMeshEvalResult {
   int frames_both_hands = 0;          // scored frames with both hands in the workspace
   int frames_both_meshed = 0;         // ... where both probabilistic meshes are non-empty
   // Means over samples of the per-hand means / p95s (mm), for the summary table.
-  tabletop_capture::RunningStats prob_mesh_to_truth, prob_truth_to_mesh, prob_p95_mesh_to_truth,
+  tabletop_common::RunningStats prob_mesh_to_truth, prob_truth_to_mesh, prob_p95_mesh_to_truth,
       prob_p95_truth_to_mesh, bin_mesh_to_truth, bin_truth_to_mesh, bin_p95_mesh_to_truth,
       bin_p95_truth_to_mesh, prob_triangles, bin_triangles, prob_ms, bin_ms;
   // The meshes of the scored frame with both hands nearest the middle of the run (for a

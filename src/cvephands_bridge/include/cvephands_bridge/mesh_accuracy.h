@@ -1,7 +1,7 @@
 // Accuracy of a hand mesh against the true surface: distances (mm) from the mesh to the truth and
 // from the truth to the mesh, as mean, 95th percentile and maximum. The truth is a set of points
 // sampled uniformly in area on the true surface (for the simulated rig:
-// tabletop_capture/sim/surface_samples.h); this file takes plain points, so it depends on
+// tabletop_sim/surface_samples.h); this file takes plain points, so it depends on
 // neither ROS nor the simulator.
 //
 // - mesh_to_truth: for each mesh vertex used by a triangle, the distance to the NEAREST TRUTH

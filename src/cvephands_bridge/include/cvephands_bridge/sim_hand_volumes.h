@@ -14,7 +14,7 @@
 
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "psfs_reconstruction/reconstructor.h"
-#include "tabletop_capture/sim/simulated_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace cvephands {
 
@@ -44,8 +44,8 @@ struct SimHandVolume {
 // One reconstructed frame set: result.hands[i] is the sub-volume of hand sides[i] (0 left,
 // 1 right; left before right), centred on that hand's true centroid.
 struct SimHandFrame {
-  const tabletop_capture::sim::SimulatedRig* rig = nullptr;  // e.g. rig->person(rig_frame)
-  const tabletop_capture::sim::SimFrame* sim = nullptr;      // the rendered frame set
+  const tabletop_sim::SimulatedRig* rig = nullptr;  // e.g. rig->person(rig_frame)
+  const tabletop_sim::SimFrame* sim = nullptr;      // the rendered frame set
   int rig_frame = 0;  // index in the rig's frames (the background frames included)
   int index = 0;      // 0, 1, ... over the visited frames
   int count = 0;      // frames that will be visited in all (for progress output)

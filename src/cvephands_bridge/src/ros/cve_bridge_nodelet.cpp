@@ -28,8 +28,8 @@
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/room_client.h"
 #include "tabletop_capture/ros/frame_set_view.h"
-#include "tabletop_capture/ros/periodic_diagnostics.h"
-#include "tabletop_capture/running_stats.h"
+#include "tabletop_common/ros/periodic_diagnostics.h"
+#include "tabletop_common/running_stats.h"
 
 namespace cvephands {
 
@@ -37,7 +37,7 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+    diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "cve_bridge", "cve bridge",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
 
@@ -252,13 +252,13 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   HandFrame frame_;
   std::string fatal_, last_error_;
   ros::Subscriber sub_;
-  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
+  std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
   ros::WallTimer connect_timer_;
   std::mutex mutex_;
   std::atomic<bool> key_frames_needed_{false};
   uint64_t frames_ = 0, sent_ = 0, dropped_offline_ = 0, rejected_ = 0, connects_ = 0;
   uint64_t bytes_sent_ = 0, face_bytes_ = 0, faces_sent_ = 0;
-  tabletop_capture::RateMeter face_rate_;
+  tabletop_common::RateMeter face_rate_;
   // Face video.
   bool face_video_ = true;
   double face_fps_ = 10.0;
@@ -268,8 +268,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   bool head_valid_ = false;
   ros::Time head_stamp_;
   ros::WallTime last_face_;
-  tabletop_capture::RateMeter byte_rate_;
-  tabletop_capture::RunningStats encode_ms_, message_bytes_;
+  tabletop_common::RateMeter byte_rate_;
+  tabletop_common::RunningStats encode_ms_, message_bytes_;
 };
 
 }  // namespace cvephands

@@ -29,8 +29,8 @@
 #include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/mesh_components.h"
 #include "cvephands_bridge/ros/mesh_conversions.h"
-#include "tabletop_capture/ros/periodic_diagnostics.h"
-#include "tabletop_capture/running_stats.h"
+#include "tabletop_common/ros/periodic_diagnostics.h"
+#include "tabletop_common/running_stats.h"
 
 namespace cvephands {
 
@@ -38,7 +38,7 @@ class HandMesherNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+    diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "hand_mesher", "hand meshing",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     try {
@@ -173,13 +173,13 @@ class HandMesherNodelet : public nodelet::Nodelet {
   std_msgs::ColorRGBA color_;
   ros::Subscriber sub_;
   ros::Publisher mesh_pub_, marker_pub_;
-  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
+  std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
   std::mutex mutex_;
   std::set<uint32_t> last_ids_;
-  tabletop_capture::RateMeter rate_;
-  tabletop_capture::GrowthMeter rejections_;
+  tabletop_common::RateMeter rate_;
+  tabletop_common::GrowthMeter rejections_;
   uint64_t frames_ = 0, rejected_ = 0, meshed_ = 0;
-  tabletop_capture::RunningStats mesh_ms_, triangles_;
+  tabletop_common::RunningStats mesh_ms_, triangles_;
 };
 
 }  // namespace cvephands

@@ -15,7 +15,7 @@
 
 #include "cvephands_bridge/hand_mesh_evaluation.h"
 #include "cvephands_bridge/mesh_render.h"
-#include "tabletop_capture/cli_args.h"
+#include "tabletop_common/cli_args.h"
 
 namespace {
 
@@ -63,7 +63,7 @@ cv::Mat picture(const cvephands::HandMeshEvalResult& r) {
 int main(int argc, char** argv) {
   cvephands::HandMeshEvalOptions o;
   std::string out = "output";
-  tabletop_capture::CliArgs args("mesh_eval", argc, argv, usage);
+  tabletop_common::CliArgs args("mesh_eval", argc, argv, usage);
   while (args.next()) {
     if (args.is("--script")) o.script = args.text();
     else if (args.is("--frames")) o.frames = static_cast<int>(args.integer(0));

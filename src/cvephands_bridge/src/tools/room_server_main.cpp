@@ -16,7 +16,7 @@
 #include <thread>
 
 #include "cvephands_bridge/room_server.h"
-#include "tabletop_capture/cli_args.h"
+#include "tabletop_common/cli_args.h"
 
 namespace {
 
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   cvephands::RoomServerOptions o;
   o.port = 8765;
   double status = 5.0;
-  tabletop_capture::CliArgs args("room_server", argc, argv, usage, /*skip_ros_args=*/true);
+  tabletop_common::CliArgs args("room_server", argc, argv, usage, /*skip_ros_args=*/true);
   while (args.next()) {
     if (args.is("--bind")) o.bind_address = args.text();
     else if (args.is("--port")) o.port = static_cast<uint16_t>(args.integer(0, 65535));

@@ -28,7 +28,7 @@
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/room_client.h"
-#include "tabletop_capture/cli_args.h"
+#include "tabletop_common/cli_args.h"
 
 namespace {
 
@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
   o.join.role = cvephands::room::Role::kViewer;
   double seconds = 0.0, interval = 5.0, wait = 0.0;
   bool decode = false;
-  tabletop_capture::CliArgs args("room_watch", argc, argv, usage);
+  tabletop_common::CliArgs args("room_watch", argc, argv, usage);
   while (args.next()) {
     if (args.is("--host")) o.host = args.text();
     else if (args.is("--port")) o.port = static_cast<uint16_t>(args.integer(1, 65535));

@@ -23,8 +23,8 @@
 
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
-#include "tabletop_capture/ros/periodic_diagnostics.h"
-#include "tabletop_capture/running_stats.h"
+#include "tabletop_common/ros/periodic_diagnostics.h"
+#include "tabletop_common/running_stats.h"
 
 namespace hand_tracking {
 namespace {
@@ -88,7 +88,7 @@ class MpfNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+    diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "mpf", "mpf hand tracking",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     int seed = 1;
@@ -293,17 +293,17 @@ class MpfNodelet : public nodelet::Nodelet {
   ros::Subscriber skin_sub_, body_sub_;
   ros::Publisher targets_pub_, markers_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
-  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
+  std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
   std::mutex pair_mutex_, mutex_;
   tabletop_msgs::VoxelVolume::ConstPtr pending_skin_, pending_body_;
   psfs::ProbabilityVolume skin_, body_;
   ros::Time last_stamp_;
-  tabletop_capture::RateMeter rate_;
-  tabletop_capture::GrowthMeter rejections_;
+  tabletop_common::RateMeter rate_;
+  tabletop_common::GrowthMeter rejections_;
   uint64_t frames_ = 0, rejected_ = 0;
   uint64_t births_ = 0, merges_ = 0, splits_ = 0, losses_ = 0;
   int active_ = 0;
-  tabletop_capture::RunningStats total_ms_, integral_ms_, weights_ms_, reconfigure_ms_;
+  tabletop_common::RunningStats total_ms_, integral_ms_, weights_ms_, reconfigure_ms_;
 };
 
 }  // namespace hand_tracking

@@ -27,15 +27,15 @@
 
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/reconstructor.h"
-#include "tabletop_capture/cli_args.h"
-#include "tabletop_capture/ros/sim_truth_msgs.h"
-#include "tabletop_capture/running_stats.h"
-#include "tabletop_capture/sim/simulated_rig.h"
-#include "tabletop_capture/sim/tracking_evaluator.h"
+#include "tabletop_common/cli_args.h"
+#include "tabletop_sim/ros/sim_truth_msgs.h"
+#include "tabletop_common/running_stats.h"
+#include "tabletop_sim/simulated_rig.h"
+#include "tabletop_sim/tracking_evaluator.h"
 
 namespace {
 
-namespace sim = tabletop_capture::sim;
+namespace sim = tabletop_sim;
 
 void usage() {
   std::fprintf(stderr,
@@ -71,7 +71,7 @@ sim::TruthPoints truthOf(const sim::GroundTruth& g) {
 }
 
 int runSim(const std::string& script, int frames, int seed, sim::TrackingEvaluator* ev,
-           tabletop_capture::RunningStats* mpf_ms, tabletop_capture::RunningStats* psfs_ms) {
+           tabletop_common::RunningStats* mpf_ms, tabletop_common::RunningStats* psfs_ms) {
   sim::SimOptions so;
   so.script = script;
   so.seed = static_cast<uint64_t>(seed);
@@ -117,8 +117,8 @@ int runBag(const std::string& path, sim::TrackingEvaluator* ev) {
   for (const auto& t : tracked) {
     auto g = truth.find(t.first);
     if (g == truth.end()) continue;
-    ev->add(t.first.toSec(), tabletop_capture::toTrackedPoints(*t.second),
-            tabletop_capture::toTruthPoints(*g->second));
+    ev->add(t.first.toSec(), tabletop_sim::toTrackedPoints(*t.second),
+            tabletop_sim::toTruthPoints(*g->second));
     ++n;
   }
   if (n == 0)
@@ -132,7 +132,7 @@ int runBag(const std::string& path, sim::TrackingEvaluator* ev) {
 int main(int argc, char** argv) {
   std::string script = "all", out = ".", bag;
   int frames = 0, seed = 1;
-  tabletop_capture::CliArgs args("track_eval", argc, argv, usage);
+  tabletop_common::CliArgs args("track_eval", argc, argv, usage);
   while (args.next()) {
     if (args.is("--script")) script = args.text();
     else if (args.is("--frames")) frames = static_cast<int>(args.integer(0));
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
   }
   ::mkdir(out.c_str(), 0755);
   sim::TrackingEvaluator ev;
-  tabletop_capture::RunningStats mpf_ms, psfs_ms;
+  tabletop_common::RunningStats mpf_ms, psfs_ms;
   std::string source;
   try {
     if (bag.empty()) {

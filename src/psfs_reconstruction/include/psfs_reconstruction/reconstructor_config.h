@@ -21,7 +21,7 @@ struct NodeletOptions {
   // Subscribe cam<i>/foreground_mask (mono8, same stamp as the frame set) for the selective
   // background update instead of the volume's back-projection.
   bool foreground_mask_topics = false;
-  // Frame sets waiting in the stage's gate (tabletop_capture/pipeline_gate.h): beyond it the
+  // Frame sets waiting in the stage's gate (tabletop_common/pipeline_gate.h): beyond it the
   // oldest waiting set is dropped (the pipeline's one drop point). Live: 2 (a source in
   // lockstep with up to 2 sets in flight then never loses one to thread timing); offline
   // evaluation: larger than the recording, so that every set is processed at any speed.

@@ -11,7 +11,7 @@
 // and reports rate, per-stage times, learning progress, rejected and dropped sets, load
 // shedding and switched-off cameras on /diagnostics.
 //
-// Frame sets wait in a PipelineGate (tabletop_capture/pipeline_gate.h) and are processed on the
+// Frame sets wait in a PipelineGate (tabletop_common/pipeline_gate.h) and are processed on the
 // nodelet's own thread: this is the pipeline's one drop point (live: the oldest waiting set goes
 // when nodelet/queue_size is exceeded; offline: a large queue_size keeps every set), and the
 // closed loop's lockstep (the next set waits for the tracker's targets of the last one).
@@ -54,14 +54,14 @@
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/reconstructor_config.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
-#include "tabletop_capture/pipeline_gate.h"
+#include "tabletop_common/pipeline_gate.h"
 #include "tabletop_capture/ros/frame_set_view.h"
-#include "tabletop_capture/ros/periodic_diagnostics.h"
-#include "tabletop_capture/running_stats.h"
+#include "tabletop_common/ros/periodic_diagnostics.h"
+#include "tabletop_common/running_stats.h"
 
 namespace psfs {
 
-using tabletop_capture::RunningStats;
+using tabletop_common::RunningStats;
 
 class PsfsNodelet : public nodelet::Nodelet {
  public:
@@ -88,7 +88,7 @@ class PsfsNodelet : public nodelet::Nodelet {
         ros::package::getPath("psfs_reconstruction") + "/config/psfs.yaml";
     pnh.param("config_file", config_file, config_file);
     pnh.param("world_frame", world_frame_, std::string("world"));
-    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+    diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "psfs", "psfs reconstruction",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     try {
@@ -101,7 +101,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       if (pnh.hasParam("tracker_timeout"))
         pnh.getParam("tracker_timeout", cfg_.nodelet.tracker_timeout);
       if (pnh.hasParam("load_shedding")) pnh.getParam("load_shedding", cfg_.nodelet.load_shedding);
-      tabletop_capture::PipelineGateConfig gate;
+      tabletop_common::PipelineGateConfig gate;
       gate.capacity = static_cast<size_t>(cfg_.nodelet.queue_size);
       gate.ack_timeout = cfg_.nodelet.tracker_timeout;
       gate_.setConfig(gate);
@@ -446,7 +446,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: " + fatal_);
       return;
     }
-    tabletop_capture::PipelineGateCounters gate;
+    tabletop_common::PipelineGateCounters gate;
     size_t pending = 0;
     int shed_every = 1;
     {
@@ -513,7 +513,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   // The gate and its worker thread; gate_mutex_ guards everything in this block.
   std::mutex gate_mutex_;
   std::condition_variable gate_cv_;
-  tabletop_capture::PipelineGate<FramePtr> gate_;
+  tabletop_common::PipelineGate<FramePtr> gate_;
   std::thread worker_;
   bool running_ = false, background_ready_ = false;
   int shed_every_ = 1;  // load shedding: hand volumes on 1 of every shed_every_ sets
@@ -528,7 +528,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   ros::Subscriber frames_sub_, roi_sub_;
   std::vector<ros::Subscriber> mask_subs_;
   ros::Publisher body_pub_, skin_pub_, hands_pub_, body_cloud_pub_, skin_cloud_pub_;
-  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
+  std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
 
   std::mutex roi_mutex_;
   tabletop_msgs::TrackedTargets::ConstPtr targets_;
@@ -538,12 +538,12 @@ class PsfsNodelet : public nodelet::Nodelet {
   bool load_tried_ = false, announced_ready_ = false, learning_ = true;
   int learned_ = 0, cameras_off_ = 0;
   uint64_t processed_ = 0, reconstructed_ = 0, rejected_ = 0, warnings_ = 0;
-  tabletop_capture::RateMeter rate_;
-  tabletop_capture::GrowthMeter rejections_, warnings_growth_, drops_growth_;
+  tabletop_common::RateMeter rate_;
+  tabletop_common::GrowthMeter rejections_, warnings_growth_, drops_growth_;
   std::string last_error_;
   std::map<std::string, ros::WallTime> warned_;
   // Per-stage times over the whole run (the demo's summary reads the means).
-  RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
+  tabletop_common::RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
 };
 
 }  // namespace psfs

@@ -21,7 +21,7 @@
 #include "psfs_reconstruction/color_space.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
 #include "psfs_reconstruction/labelled_pixels.h"
-#include "tabletop_capture/cli_args.h"
+#include "tabletop_common/cli_args.h"
 
 namespace {
 
@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
   cmdline << "train_skin_model";
   for (int i = 1; i < argc; ++i) cmdline << " " << argv[i];
 
-  tabletop_capture::CliArgs args("train_skin_model", argc, argv, usage);
+  tabletop_common::CliArgs args("train_skin_model", argc, argv, usage);
   while (args.next()) {
     if (args.is("--data")) {
       files.emplace_back(args.text(), order);

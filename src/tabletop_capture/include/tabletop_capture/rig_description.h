@@ -1,5 +1,5 @@
 // A camera rig: the calibrated cameras and the world frame they are expressed in, loaded from
-// and saved to a rig YAML file (format documented in config/sim_rig.yaml). ROS-free.
+// and saved to a rig YAML file (format documented in tabletop_sim/config/sim_rig.yaml). ROS-free.
 #pragma once
 
 #include <stdexcept>

@@ -23,9 +23,9 @@
 #include "tabletop_capture/frame_set_assembler.h"
 #include "tabletop_capture/image_conversion.h"
 #include "tabletop_capture/ros/conversions.h"
-#include "tabletop_capture/ros/periodic_diagnostics.h"
+#include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_capture/ros/published_frames.h"
-#include "tabletop_capture/running_stats.h"
+#include "tabletop_common/running_stats.h"
 
 namespace tabletop_capture {
 
@@ -84,7 +84,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
                                                          std::max(1, image_queue_size), on_info);
     }
     pub_ = nh.advertise<tabletop_msgs::MultiViewFrame>("frames", queue_size);
-    diag_ = std::make_unique<tabletop_capture::PeriodicDiagnostics>(
+    diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "frame_synchronizer", "frame synchronizer",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     boost::function<void(const ros::WallTimerEvent&)> on_tick = [this](const ros::WallTimerEvent&) {
@@ -336,7 +336,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   ros::Publisher pub_;
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::unique_ptr<tabletop_capture::PeriodicDiagnostics> diag_;
+  std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
   ros::WallTimer tick_;
   std::string world_frame_;
   double tf_timeout_ = 0.05;
@@ -346,7 +346,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   ros::WallTime newest_arrival_, last_diag_;
   double newest_stamp_ = 0;
-  RunningStats convert_ms_, bundle_ms_;
+  tabletop_common::RunningStats convert_ms_, bundle_ms_;
   uint64_t published_ = 0, published_at_last_diag_ = 0, problems_at_last_diag_ = 0,
            tf_failures_ = 0;
 };
