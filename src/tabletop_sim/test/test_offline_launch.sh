@@ -5,7 +5,10 @@
 # launch ends by itself once the pipeline has processed the bag, that every frame set came out
 # of the synchroniser and was reconstructed after the learning sets, and that both runs gave
 # the SAME volumes, hand volumes and targets (digests.txt: CRC-32 per volume): offline results
-# do not depend on the playback rate or on the machine's speed.
+# do not depend on the playback rate or on the machine's speed. A third run plays the bag twice
+# with one roscore and one pipeline (time goes back between the passes, as with a second
+# `rosbag play` or `rosbag play -l`): the synchroniser, pSfS and the tracker start over, and
+# the second pass must give the same digests as a first play.
 # Writes a JUnit result file (argument 1) so catkin_test_results counts it.
 set -u
 RESULT="$1"
@@ -35,7 +38,7 @@ export PATH=/usr/bin:/bin:$PATH
 PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI="http://127.0.0.1:$PORT" ROS_HOSTNAME=127.0.0.1 ROS_LOG_DIR="$WORK/log"
 LOG="$WORK/run.log"
-name="bag_with_${CAMERAS}_bayer_cameras_gives_the_same_results_at_any_rate"
+name="bag_with_${CAMERAS}_bayer_cameras_gives_the_same_results_at_any_rate_and_when_played_twice"
 
 if ! "$RENDER_BAG" --out "$WORK/test.bag" --frames $FRAMES --script reach_targets \
      --cameras $CAMERAS --bayer bayer_grbg8 --empty-frames $EMPTY > "$LOG" 2>&1; then
@@ -57,7 +60,7 @@ run() {  # rate, output dir, command prefix...
   start=$(date +%s)
   # Generous limit: with a quarter of a slow machine's CPU a set takes about a second.
   timeout 300 "$@" roslaunch -p "$PORT" "$ROOT/launch/offline.launch" bag:="$WORK/test.bag" \
-    cameras:=$CAMERAS rate:="$rate" output_dir:="$out" digests:=true >> "$LOG" 2>&1
+    cameras:=$CAMERAS rate:="$rate" output_dir:="$out" digests:=true plays:="${PLAYS:-1}" >> "$LOG" 2>&1
   rc=$?
   took=$(( $(date +%s) - start ))
   echo "[offline_launch] rate $rate: roslaunch exit $rc after ${took} s" | tee -a "$LOG"
@@ -91,6 +94,20 @@ if run 1.0 "$WORK/out_full" && run 0.4 "$WORK/out_slow" "${THROTTLE[@]}"; then
   else
     echo "[offline_launch] both runs gave identical volumes, hand volumes and targets" \
       "($(wc -l < "$WORK/out_full/digests.txt") sets)" | tee -a "$LOG"
+  fi
+fi
+if [ -z "$FAIL" ] && PLAYS=2 run 1.0 "$WORK/out_twice"; then
+  if [ ! -f "$WORK/out_twice/digests_play2.txt" ]; then
+    FAIL="bag played twice: the second pass gave nothing (no digests_play2.txt)"
+  elif ! diff "$WORK/out_full/digests.txt" "$WORK/out_twice/digests_play2.txt" >> "$LOG" 2>&1; then
+    FAIL="bag played twice: the second pass gave other volumes or targets than a first play"
+  elif ! diff "$WORK/out_full/digests.txt" "$WORK/out_twice/digests.txt" >> "$LOG" 2>&1; then
+    FAIL="bag played twice: the first pass differs from a single play"
+  elif ! grep -q "time went back" "$LOG"; then
+    FAIL="bag played twice: no stage said that time went back"
+  else
+    echo "[offline_launch] bag played twice: both passes identical to a single play" \
+      "($(wc -l < "$WORK/out_twice/digests_play2.txt") sets in the second)" | tee -a "$LOG"
   fi
 fi
 junit "$name" "$FAIL" "$LOG"

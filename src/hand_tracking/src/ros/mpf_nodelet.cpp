@@ -150,10 +150,14 @@ class MpfNodelet : public nodelet::Nodelet {
     const ros::Time stamp = skin_msg.header.stamp;
     double dt = last_stamp_.isZero() ? tracker_->params().reference_dt : (stamp - last_stamp_).toSec();
     if (dt <= 0.0) {
-      ++rejected_;
-      NODELET_WARN_THROTTLE(5.0, "mpf: volume at %.3f is not newer than the last one: ignored",
-                            stamp.toSec());
-      return;
+      // Volumes come in stamp order: time went back (a bag played again or looped). The tracker
+      // starts over as constructed (same seed), so a replay gives what the first play gave.
+      NODELET_WARN("mpf: volume at %.3f is not newer than the last one (%.3f): time went back "
+                   "(a bag played again or looped?): the tracker starts over", stamp.toSec(),
+                   last_stamp_.toSec());
+      tracker_->reset();
+      ++time_jumps_;
+      dt = tracker_->params().reference_dt;
     }
     // A gap (dropped sets, a paused bag) must not let the dynamics extrapolate wildly.
     dt = std::min(dt, 0.5);
@@ -275,6 +279,7 @@ class MpfNodelet : public nodelet::Nodelet {
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "tracking %d target(s)", active_);
     stat.add("rate (Hz)", rate);
     stat.add("frames", frames_);
+    stat.add("time jumps back (started over)", time_jumps_);
     stat.add("active targets", active_);
     stat.add("mpf total (ms)", total_ms_.mean());
     stat.add("mpf integral volumes (ms)", integral_ms_.mean());
@@ -298,6 +303,7 @@ class MpfNodelet : public nodelet::Nodelet {
   tabletop_msgs::VoxelVolume::ConstPtr pending_skin_, pending_body_;
   psfs::ProbabilityVolume skin_, body_;
   ros::Time last_stamp_;
+  uint64_t time_jumps_ = 0;  // under mutex_
   tabletop_common::RateMeter rate_;
   tabletop_common::GrowthMeter rejections_;
   uint64_t frames_ = 0, rejected_ = 0;

@@ -143,6 +143,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     std::deque<FramePtr> dropped;
     {
       std::lock_guard<std::mutex> lock(gate_mutex_);
+      checkTimeJump(msg->header.stamp);
       // The learning sets are the recording's first ones: they are never dropped.
       const bool keep = learning_sets_queued_ < cfg_.params.background.learning_frames &&
                         !background_ready_;
@@ -159,6 +160,28 @@ class PsfsNodelet : public nodelet::Nodelet {
                             getName().c_str(), d->header.stamp.toSec(), cfg_.nodelet.queue_size);
       publishProcessed(d->header.stamp, "dropped");
     }
+  }
+
+  // Called with gate_mutex_ held. The synchroniser sends sets in stamp order, so a set that is
+  // not newer than the last one means time went back: a bag played again or in a loop. The
+  // recording starts over with its empty workspace, so everything learned from the last pass
+  // goes (queue, background model, hand ROIs, shedding) and the replay gives what a first play
+  // gives. The models are reset by the worker before it processes the next set (see work()).
+  void checkTimeJump(const ros::Time& stamp) {
+    const ros::Time last = last_in_;
+    last_in_ = stamp;
+    if (last.isZero() || stamp > last) return;
+    const std::deque<FramePtr> forgotten = gate_.clear();
+    NODELET_WARN("psfs: frame set %.3f is not newer than the last one (%.3f): time went back (a "
+                 "bag played again or looped?); %zu queued set(s) dropped, the background is "
+                 "learned again", stamp.toSec(), last.toSec(), forgotten.size());
+    for (const auto& d : forgotten) publishProcessed(d->header.stamp, "dropped");
+    learning_sets_queued_ = 0;
+    background_ready_ = false;
+    recent_drops_.clear();
+    shed_every_ = 1;
+    reset_pending_ = true;
+    ++time_jumps_;
   }
 
   // Called with gate_mutex_ held. Load shedding is a step controller with hysteresis: while
@@ -189,6 +212,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     while (running_) {
       const double now = steadySeconds();
       std::optional<FramePtr> next;
+      bool reset_next = false;
       if (outcome_) {
         // The last set's `processed` ack. A reconstructed set's waits for the tracker's answer,
         // so a lockstep source counts the whole closed loop as in flight; and the next set is
@@ -199,24 +223,45 @@ class PsfsNodelet : public nodelet::Nodelet {
           continue;
         }
         next = gate_.pop(now);
+        const bool reset = next && std::exchange(reset_pending_, false);
         const std::pair<ros::Time, std::string> done = *outcome_;
         outcome_.reset();
         lock.unlock();
         publishProcessed(done.first, done.second.c_str());
         lock.lock();
         if (!next) continue;  // a set pushed meanwhile is popped at once, not after a wait
+        reset_next = reset;
       } else {
         next = gate_.pop(now);
         if (!next) {  // popped and waited under one lock hold: a push always wakes us
           gate_cv_.wait_for(lock, std::chrono::duration<double>(0.2));
           continue;
         }
+        reset_next = std::exchange(reset_pending_, false);
       }
       const int shed_every = shed_every_;
       lock.unlock();
+      // Popped under the same lock as the flag was read: a set of the last pass is never taken
+      // for the first of the replay.
+      if (reset_next) startOver();
       process(*next, shed_every);
       lock.lock();
     }
+  }
+
+  // Worker thread: after a time jump, the state a fresh nodelet has.
+  void startOver() {
+    recon_->resetBackground();
+    shed_counter_ = 0;
+    {
+      std::lock_guard<std::mutex> lock(roi_mutex_);
+      targets_.reset();
+    }
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    load_tried_ = false;
+    announced_ready_ = false;
+    learning_ = true;
+    learned_ = 0;
   }
 
   // The fate of the set being processed; work() publishes it on psfs/processed.
@@ -449,11 +494,13 @@ class PsfsNodelet : public nodelet::Nodelet {
     tabletop_common::PipelineGateCounters gate;
     size_t pending = 0;
     int shed_every = 1;
+    uint64_t time_jumps = 0;
     {
       std::lock_guard<std::mutex> lock(gate_mutex_);
       gate = gate_.counters();
       pending = gate_.pendingCount();
       shed_every = shed_every_;
+      time_jumps = time_jumps_;
     }
     std::lock_guard<std::mutex> lock(stats_mutex_);
     const double rate = rate_.rate(reconstructed_);
@@ -484,6 +531,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("frame sets rejected", rejected_);
     stat.add("frame sets received", gate.pushed);
     stat.add("frame sets dropped (pipeline busy)", gate.dropped);
+    stat.add("time jumps back (started over)", time_jumps);
     stat.add("drop rate (%)", gate.pushed ? 100.0 * gate.dropped / gate.pushed : 0.0);
     stat.add("frame sets waiting", pending);
     stat.add("load shedding", shed_every > 1 ? "on (hand volumes on 1 of every " +
@@ -521,6 +569,9 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::deque<bool> recent_drops_;
   std::optional<std::pair<ros::Time, std::string>> outcome_;  // for psfs/processed, see work()
   uint64_t shed_counter_ = 0;           // worker thread only
+  ros::Time last_in_;                   // stamp of the last set taken in (time-jump detection)
+  bool reset_pending_ = false;          // time went back: start over before the next set
+  uint64_t time_jumps_ = 0;
   std::atomic<uint64_t> hands_shed_{0};  // hand volume sets given up by load shedding
   ros::Publisher processed_pub_;
 

@@ -41,6 +41,8 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     bool have_pose = false;
     ros::WallTime pose_time;  // when the pose was last looked up
     uint64_t images = 0, rejected = 0;
+    double last_stamp = -1e300;  // of its last image (time-jump detection)
+    bool before_jump = false;    // no image from after the last time jump yet
   };
 
   void onInit() override {
@@ -60,6 +62,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     pnh.param("image_queue_size", image_queue_size, image_queue_size);
     pnh.param("hold_until_subscribers", hold_until_subscribers_, hold_until_subscribers_);
     pnh.param("max_held", max_held_, max_held_);
+    pnh.param("time_jump_threshold", time_jump_threshold_, time_jump_threshold_);
     cfg.num_cameras = num_cameras;
     cfg.max_pending = static_cast<size_t>(std::max(1, max_pending));
     try {
@@ -155,6 +158,11 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       convert_ms_.add(ms);
+      if (!checkTimeJump(i, msg->header.stamp.toSec())) {
+        NODELET_WARN_THROTTLE(5.0, "frame synchroniser: %s: image %.3f from before the time jump "
+                              "dropped", name.c_str(), msg->header.stamp.toSec());
+        return;
+      }
       const std::vector<uint64_t> missing_before = assembler_->counters().missing_per_camera;
       const AddResult r = assembler_->add(i, msg->header.stamp.toSec(), rgb);
       newest_arrival_ = ros::WallTime::now();
@@ -169,6 +177,34 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       // Published under the lock so that sets leave in stamp order whichever thread completed them.
       for (auto& set : assembler_->takeCompleted()) publishSet(set);
     }
+  }
+
+  // Called with mutex_ held. One camera's images arrive in stamp order (one topic), so a stamp
+  // more than time_jump_threshold before that camera's last one means its clock went back: a
+  // bag played again or in a loop (rosbag play -l). Pending sets and the watermark are
+  // forgotten, so the replay is assembled like a first play instead of being dropped as late.
+  // Returns false for an image that is still from before the jump (in a loop, another camera's
+  // last images of the previous pass can come after the first camera's jump).
+  bool checkTimeJump(int i, double stamp) {
+    Camera& cam = cameras_[i];
+    if (cam.before_jump) {
+      if (stamp > jump_stamp_ + time_jump_threshold_) return false;
+      cam.before_jump = false;
+      cam.last_stamp = stamp;
+      return true;
+    }
+    const double back = cam.last_stamp - stamp;
+    cam.last_stamp = stamp;
+    if (!(back > time_jump_threshold_)) return true;
+    NODELET_WARN("frame synchroniser: time went back by %.3f s on %s (a bag played again or "
+                 "looped?): %zu pending frame set(s) dropped, assembling from %.3f on",
+                 back, cameras_[i].name.c_str(), assembler_->pendingCount(), stamp);
+    assembler_->reset();
+    for (size_t c = 0; c < cameras_.size(); ++c) cameras_[c].before_jump = static_cast<int>(c) != i;
+    jump_stamp_ = stamp;
+    newest_stamp_ = stamp;
+    ++time_jumps_;
+    return true;
   }
 
   // Called with mutex_ held: names the cameras whose images were missing in dropped sets.
@@ -318,6 +354,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     stat.add("late images (dropped)", k.late);
     stat.add("duplicate images (dropped)", k.duplicate);
     stat.add("sets without tf (dropped)", tf_failures_);
+    stat.add("time jumps back (reset)", time_jumps_);
     stat.add("convert time mean (ms)", convert_ms_.mean());
     stat.add("bundle time mean (ms)", bundle_ms_.mean());
     stat.add("pending sets", assembler_->pendingCount());
@@ -346,6 +383,10 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   ros::WallTime newest_arrival_, last_diag_;
   double newest_stamp_ = 0;
+  // A camera's stamp this far (s) before its last one is a time jump (see checkTimeJump).
+  double time_jump_threshold_ = 1.0;
+  uint64_t time_jumps_ = 0;
+  double jump_stamp_ = 0;  // the first stamp after the last jump
   tabletop_common::RunningStats convert_ms_, bundle_ms_;
   uint64_t published_ = 0, published_at_last_diag_ = 0, problems_at_last_diag_ = 0,
            tf_failures_ = 0;

@@ -21,7 +21,9 @@
 //   ~volume_threshold  a voxel is "in the volume" above this probability (the fusion's t)  [0.75]
 //   ~digests       write digests.txt: per frame set what pSfS did with it (psfs/processed),
 //                  the CRC-32 of the body, skin and hand volumes and the tracked targets, to
-//                  compare two runs of one bag                                         [false]
+//                  compare two runs of one bag; when the bag is played again within one run
+//                  (psfs/processed stamps go back), each further pass goes to
+//                  digests_play<k>.txt (k = 2, 3, ...)                                 [false]
 //
 // The summary also follows a frame set through the stages (sets in and out of each, from
 // their /diagnostics counters), the one place that drops them (pSfS), load shedding, and which
@@ -81,13 +83,15 @@ class DemoMonitor {
               d += " " + std::to_string(i < m->target_ids.size() ? m->target_ids[i] : 0) + ":" +
                    crcOf(m->volumes[i].data);
             std::lock_guard<std::mutex> lock(mutex_);
-            digest_[m->header.stamp]["hands"] = d;
+            digest_[{pass_, m->header.stamp}]["hands"] = d;
           };
       hands_sub_ = nh_.subscribe<tabletop_msgs::HandVolumes>("psfs/hand_volumes", 300, on_hands);
       boost::function<void(const std_msgs::Header::ConstPtr&)> on_processed =
           [this](const std_msgs::Header::ConstPtr& h) {
             std::lock_guard<std::mutex> lock(mutex_);
-            digest_[h->stamp]["psfs"] = h->frame_id;
+            if (!last_processed_.isZero() && h->stamp < last_processed_) ++pass_;
+            last_processed_ = h->stamp;
+            digest_[{pass_, h->stamp}]["psfs"] = h->frame_id;
           };
       processed_sub_ = nh_.subscribe<std_msgs::Header>("psfs/processed", 1000, on_processed);
     }
@@ -148,7 +152,7 @@ class DemoMonitor {
                       t.position.x, t.position.y, t.position.z);
         d += buf;
       }
-      digest_[msg->header.stamp]["targets"] = d;
+      digest_[{pass_, msg->header.stamp}]["targets"] = d;
     }
     tracked_[msg->header.stamp] = msg;
     while (tracked_.size() > 100) tracked_.erase(tracked_.begin());
@@ -184,7 +188,7 @@ class DemoMonitor {
     auto& mine = truth ? truth_volumes_[kind] : recon_volumes_[kind];
     auto& other = truth ? recon_volumes_[kind] : truth_volumes_[kind];
     if (!truth) ++volumes_received_[kind];
-    if (!truth && digests_) digest_[msg->header.stamp][kind == 0 ? "body" : "skin"] = crcOf(msg->data);
+    if (!truth && digests_) digest_[{pass_, msg->header.stamp}][kind == 0 ? "body" : "skin"] = crcOf(msg->data);
     auto it = other.find(msg->header.stamp);
     if (it == other.end()) {
       mine[msg->header.stamp] = msg;
@@ -347,9 +351,17 @@ class DemoMonitor {
     std::printf("%s", text.c_str());
     std::ofstream(output_dir_ + "/summary.txt") << text;
     if (digests_) {
-      std::ofstream out(output_dir_ + "/digests.txt");
+      std::ofstream out;
+      int open_pass = -1;
       for (const auto& d : digest_) {
-        out << d.first.sec << "." << std::setw(9) << std::setfill('0') << d.first.nsec
+        if (d.first.first != open_pass) {
+          open_pass = d.first.first;
+          out.close();
+          out.open(output_dir_ + (open_pass == 0 ? std::string("/digests.txt")
+                                                 : "/digests_play" + std::to_string(open_pass + 1) + ".txt"));
+        }
+        const ros::Time& stamp = d.first.second;
+        out << stamp.sec << "." << std::setw(9) << std::setfill('0') << stamp.nsec
             << std::setfill(' ');
         for (const char* k : {"psfs", "body", "skin", "targets", "hands"}) {
           auto it = d.second.find(k);
@@ -580,7 +592,10 @@ class DemoMonitor {
   ros::NodeHandle nh_, pnh_;
   ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_, hands_sub_, processed_sub_;
   bool digests_ = false;
-  std::map<ros::Time, std::map<std::string, std::string>> digest_;
+  // Keyed by (pass over the bag, stamp): a bag played twice in one run has the same stamps twice.
+  std::map<std::pair<int, ros::Time>, std::map<std::string, std::string>> digest_;
+  int pass_ = 0;              // under mutex_: incremented when psfs/processed stamps go back
+  ros::Time last_processed_;  // under mutex_
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> tracked_, scored_tracked_;
   TrackingEvaluator tracking_;
   ros::WallTimer timer_;
