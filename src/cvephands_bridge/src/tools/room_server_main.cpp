@@ -6,6 +6,11 @@
 // Prints a status line every --status seconds (rooms, participants, messages, drops) and stops
 // cleanly on SIGINT / SIGTERM. Arguments starting with "__" (what roslaunch appends: __name:=,
 // __log:=) are ignored, so launch files can start it as a node.
+//
+// Without --static it serves the browser client it finds (defaultStaticRoot): the installed one
+// next to its own executable, <prefix>/lib/cvephands_bridge/room_server ->
+// <prefix>/share/cvephands_bridge/web/dist (install space), else the one built in the source
+// tree (devel space, CVEPHANDS_WEB_DIST from CMake). `--static ""` serves no files.
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -14,11 +19,32 @@
 #include <filesystem>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cvephands_bridge/room_server.h"
 #include "tabletop_common/cli_args.h"
 
 namespace {
+
+namespace fs = std::filesystem;
+
+// The browser client's directory for a room server started without --static: the install
+// space's share/cvephands_bridge/web/dist relative to this executable (found through
+// /proc/self/exe, so a relocated install space works), else the source tree's web/dist that the
+// devel-space binary was built from; "" when neither holds the client (relaying only).
+std::string defaultStaticRoot() {
+  std::vector<fs::path> candidates;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back(exe.parent_path() / "../../share/cvephands_bridge/web/dist");
+#ifdef CVEPHANDS_WEB_DIST
+  candidates.push_back(CVEPHANDS_WEB_DIST);
+#endif
+  for (const fs::path& c : candidates) {
+    if (fs::is_regular_file(c / "index.html", ec)) return fs::weakly_canonical(c, ec).string();
+  }
+  return "";
+}
 
 std::atomic<bool> g_stop{false};
 void onSignal(int) { g_stop = true; }
@@ -30,7 +56,9 @@ void usage() {
                "  --bind    address to listen on (default 127.0.0.1; 0.0.0.0 for every interface)\n"
                "  --port    TCP port of HTTP + WebSocket (default 8765; 0 = any free port)\n"
                "  --token   shared token every participant must send (default: none)\n"
-               "  --static  directory of the browser client served over HTTP (default: none)\n"
+               "  --static  directory of the browser client served over HTTP (default: the\n"
+               "            installed share/cvephands_bridge/web/dist beside this program, else\n"
+               "            the source tree's web/dist; \"\" = serve no files)\n"
                "  --seats   seats per room around the virtual table (default 6)\n"
                "  --status  seconds between status lines (default 5; 0 = none)\n");
 }
@@ -41,12 +69,16 @@ int main(int argc, char** argv) {
   cvephands::RoomServerOptions o;
   o.port = 8765;
   double status = 5.0;
+  bool static_given = false;
   tabletop_common::CliArgs args("room_server", argc, argv, usage, /*skip_ros_args=*/true);
   while (args.next()) {
     if (args.is("--bind")) o.bind_address = args.text();
     else if (args.is("--port")) o.port = static_cast<uint16_t>(args.integer(0, 65535));
     else if (args.is("--token")) o.token = args.text();
-    else if (args.is("--static")) o.static_root = args.text();
+    else if (args.is("--static")) {
+      o.static_root = args.text();
+      static_given = true;
+    }
     else if (args.is("--seats")) o.seats.seats = static_cast<int>(args.integer(1, 1024));
     else if (args.is("--status")) status = args.number(0.0);
     else if (args.help()) {
@@ -58,6 +90,14 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
+  if (!static_given) {
+    o.static_root = defaultStaticRoot();
+    if (o.static_root.empty())
+      std::fprintf(stderr,
+                   "[room_server] WARNING: no browser client found (not installed beside this "
+                   "program, not built in the source tree: scripts/setup.sh builds it); relaying "
+                   "hands only\n");
+  }
   if (!o.static_root.empty() && !std::filesystem::is_directory(o.static_root)) {
     // Relaying hands needs no client files: keep serving the rigs, say what is missing.
     std::fprintf(stderr,
