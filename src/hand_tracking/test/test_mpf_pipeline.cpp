@@ -146,8 +146,9 @@ TEST(MpfPipeline, TracksTheSimulatedPersonAndClosesTheLoop) {
               "and > 1000 triangles\n", mesh_sets, hand_volumes.size(), meshes_ok, volumes_total);
   EXPECT_EQ(mesh_sets, hand_volumes.size());  // the mesher's queue never drops
   EXPECT_GE(meshes_ok + 6, volumes_total);
-  // tf of the head.
-  EXPECT_TRUE(tf_buffer.canTransform("world", "head", ros::Time(0)));
+  // tf of the head, under the default prefix only (a bare "head" could clash with a robot's URDF).
+  EXPECT_TRUE(tf_buffer.canTransform("world", "tabletop/head", ros::Time(0)));
+  EXPECT_FALSE(tf_buffer.canTransform("world", "head", ros::Time(0)));
   ASSERT_TRUE(diag.has("volumes rejected"));
   ASSERT_TRUE(psfs_diag.has("frame sets dropped (pipeline busy)"));
   EXPECT_EQ(psfs_diag.get("frame sets dropped (pipeline busy)"), "0");

@@ -95,7 +95,7 @@ class MpfNodelet : public nodelet::Nodelet {
     pnh.param("seed", seed, seed);
     pnh.param("publish_particles", publish_particles_, false);
     pnh.param("world_frame", world_frame_, std::string("world"));
-    pnh.param("tf_prefix", tf_prefix_, std::string());
+    pnh.param("tf_prefix", tf_prefix_, std::string("tabletop/"));
     try {
       tracker_ = std::make_unique<MpfTracker>(loadParams(pnh), static_cast<uint64_t>(seed));
     } catch (const std::exception& e) {

@@ -39,6 +39,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     std::string info_error;                // why the latest camera_info was rejected
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     bool have_pose = false;
+    std::string pose_frame;   // the optical frame the pose is of
     ros::WallTime pose_time;  // when the pose was last looked up
     uint64_t images = 0, rejected = 0;
     double last_stamp = -1e300;  // of its last image (time-jump detection)
@@ -155,6 +156,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       rgb = out;
     }
     const double ms = (ros::WallTime::now() - t0).toSec() * 1e3;
+    refreshPose(i, info->header.frame_id);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       convert_ms_.add(ms);
@@ -279,8 +281,11 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     for (size_t i = 0; i < n; ++i) {
       Camera& c = cameras_[i];
       const sensor_msgs::CameraInfoConstPtr& info = c.info;
-      if (!info || !lookupPose(c, info->header.frame_id)) {
+      if (!info || !c.have_pose || c.pose_frame != info->header.frame_id) {
         ++tf_failures_;
+        NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no pose (tf %s -> %s): set dropped",
+                               c.name.c_str(), world_frame_.c_str(),
+                               info ? info->header.frame_id.c_str() : "?");
         return;
       }
       out->camera_names[i] = c.name;
@@ -296,27 +301,38 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     ++published_;
   }
 
-  bool lookupPose(Camera& c, const std::string& frame_id) {
-    if (c.have_pose && (ros::WallTime::now() - c.pose_time).toSec() < 1.0) return true;
+  // Called WITHOUT mutex_: a tf lookup can wait up to tf_timeout, and every camera callback
+  // needs mutex_. The rig is static: the pose is looked up again once a second, and a failed
+  // lookup keeps the last known pose (or, without one, the camera's sets are dropped).
+  void refreshPose(int i, const std::string& frame_id) {
+    const ros::WallTime now = ros::WallTime::now();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const Camera& c = cameras_[i];
+      if (c.have_pose && c.pose_frame == frame_id && (now - c.pose_time).toSec() < 1.0) return;
+    }
+    Eigen::Isometry3d pose;
+    std::string error;
     try {
-      // Static rig: the latest transform is the right one; refreshed once a second.
       const geometry_msgs::TransformStamped t =
           tf_buffer_.lookupTransform(world_frame_, frame_id, ros::Time(0), ros::Duration(tf_timeout_));
-      Eigen::Isometry3d pose;
-      if (!fromTransform(t.transform, &pose)) {
-        NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: tf %s -> %s is not finite",
-                               c.name.c_str(), world_frame_.c_str(), frame_id.c_str());
-        return false;
-      }
-      c.pose = pose;
-      c.have_pose = true;
-      c.pose_time = ros::WallTime::now();
-      return true;
+      if (!fromTransform(t.transform, &pose)) error = "the transform is not finite";
     } catch (const tf2::TransformException& e) {
-      if (c.have_pose) return true;  // keep the last known pose of a static camera
-      NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no tf %s -> %s (%s): set dropped",
-                             c.name.c_str(), world_frame_.c_str(), frame_id.c_str(), e.what());
-      return false;
+      error = e.what();
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    Camera& c = cameras_[i];
+    // With a pose, a failure is retried after a second, not on every image; without one, at
+    // the next image (the static tf may simply not have arrived yet).
+    c.pose_time = now;
+    if (error.empty()) {
+      c.pose = pose;
+      c.pose_frame = frame_id;
+      c.have_pose = true;
+    } else if (!c.have_pose || c.pose_frame != frame_id) {
+      c.have_pose = false;
+      NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no tf %s -> %s (%s): its sets are dropped",
+                             c.name.c_str(), world_frame_.c_str(), frame_id.c_str(), error.c_str());
     }
   }
 
