@@ -17,6 +17,7 @@
 #include <ros/ros.h>
 
 #include <tabletop_msgs/HandVolumes.h>
+#include <std_srvs/Trigger.h>
 #include <tabletop_msgs/MultiViewFrame.h>
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
@@ -199,8 +200,21 @@ TEST(PsfsPipeline, SimRigToVolumes) {
   waitFor([&] { return bad.getNumSubscribers() > 0; }, 5.0);
   bad.publish(f);
   EXPECT_TRUE(waitFor([&] { return diag.get("frame sets rejected") == "1"; }, 5.0));
-  std::lock_guard<std::mutex> l2(m);
-  EXPECT_NE(diag.message().find("encoding 'mono8'"), std::string::npos) << diag.message();
+  {
+    std::lock_guard<std::mutex> l2(m);
+    EXPECT_NE(diag.message().find("encoding 'mono8'"), std::string::npos) << diag.message();
+  }
+
+  // ~relearn_background: answered, and the stage reports that it learns again from scratch.
+  const std::string service = "/tabletop/psfs/relearn_background";
+  ASSERT_TRUE(ros::service::waitForService(service, 5000));
+  std_srvs::Trigger relearn;
+  ASSERT_TRUE(ros::service::call(service, relearn));
+  EXPECT_TRUE(relearn.response.success);
+  EXPECT_NE(relearn.response.message.find("next 25 frame sets"), std::string::npos)
+      << relearn.response.message;
+  EXPECT_TRUE(waitFor([&] { return diag.message().find("learning the background (0/25)") !=
+                                   std::string::npos; }, 5.0)) << diag.message();
 }
 
 int main(int argc, char** argv) {

@@ -10,6 +10,9 @@
 //                                         what a lockstep source such as the SimRig paces on)
 // and reports rate, per-stage times, learning progress, rejected and dropped sets, load
 // shedding and switched-off cameras on /diagnostics.
+// Service ~relearn_background (std_srvs/Trigger): forget the background model and learn it
+// again from the next learning_frames sets (the workspace must be empty then), e.g. after the
+// lighting or the room changed.
 //
 // Frame sets wait in a PipelineGate (tabletop_common/pipeline_gate.h) and are processed on the
 // nodelet's own thread: this is the pipeline's one drop point (live: the oldest waiting set goes
@@ -45,6 +48,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/Header.h>
+#include <std_srvs/Trigger.h>
 
 #include <tabletop_msgs/HandVolumes.h>
 #include <tabletop_msgs/MultiViewFrame.h>
@@ -122,6 +126,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     body_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("psfs/body_cloud", 1);
     skin_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("psfs/skin_cloud", 1);
     processed_pub_ = nh.advertise<std_msgs::Header>("psfs/processed", 50);
+    relearn_srv_ = pnh.advertiseService("relearn_background", &PsfsNodelet::onRelearn, this);
     roi_sub_ = nh.subscribe(cfg_.nodelet.hand_roi_topic, 5, &PsfsNodelet::onTargets, this);
     running_ = true;
     worker_ = std::thread(&PsfsNodelet::work, this);
@@ -249,8 +254,35 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
   }
 
-  // Worker thread: after a time jump, the state a fresh nodelet has.
+  bool onRelearn(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+    {
+      std::lock_guard<std::mutex> lock(gate_mutex_);
+      learning_sets_queued_ = 0;
+      background_ready_ = false;
+      reset_pending_ = true;
+      relearn_requested_ = true;
+    }
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      learning_ = true;  // reported at once; the models are reset before the next set
+      learned_ = 0;
+    }
+    res.success = true;
+    res.message = "the background is learned again from the next " +
+                  std::to_string(cfg_.params.background.learning_frames) +
+                  " frame sets: keep the workspace empty";
+    NODELET_WARN("psfs: relearn_background called: %s", res.message.c_str());
+    return true;
+  }
+
+  // Worker thread: after a time jump or a relearn request, the state a fresh nodelet has (a
+  // relearn learns the background; it does not load it again from background_load_dir).
   void startOver() {
+    bool relearn = false;
+    {
+      std::lock_guard<std::mutex> lock(gate_mutex_);
+      relearn = std::exchange(relearn_requested_, false);
+    }
     recon_->resetBackground();
     shed_counter_ = 0;
     {
@@ -258,7 +290,7 @@ class PsfsNodelet : public nodelet::Nodelet {
       targets_.reset();
     }
     std::lock_guard<std::mutex> lock(stats_mutex_);
-    load_tried_ = false;
+    load_tried_ = relearn;
     announced_ready_ = false;
     learning_ = true;
     learned_ = 0;
@@ -570,7 +602,9 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::optional<std::pair<ros::Time, std::string>> outcome_;  // for psfs/processed, see work()
   uint64_t shed_counter_ = 0;           // worker thread only
   ros::Time last_in_;                   // stamp of the last set taken in (time-jump detection)
-  bool reset_pending_ = false;          // time went back: start over before the next set
+  bool reset_pending_ = false;          // time went back or relearn: start over before the next set
+  bool relearn_requested_ = false;      // the reset is a relearn_background call
+  ros::ServiceServer relearn_srv_;
   uint64_t time_jumps_ = 0;
   std::atomic<uint64_t> hands_shed_{0};  // hand volume sets given up by load shedding
   ros::Publisher processed_pub_;
