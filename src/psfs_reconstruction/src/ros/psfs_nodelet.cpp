@@ -80,6 +80,8 @@ class PsfsNodelet : public nodelet::Nodelet {
 
  private:
   using FramePtr = tabletop_msgs::MultiViewFrame::ConstPtr;
+  // Why the worker starts over before the next set: time went back, or relearn_background.
+  enum class StartOver { kNone, kTimeJump, kRelearn };
 
   static double steadySeconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -181,12 +183,19 @@ class PsfsNodelet : public nodelet::Nodelet {
                  "bag played again or looped?); %zu queued set(s) dropped, the background is "
                  "learned again", stamp.toSec(), last.toSec(), forgotten.size());
     for (const auto& d : forgotten) publishProcessed(d->header.stamp, "dropped");
-    learning_sets_queued_ = 0;
-    background_ready_ = false;
     recent_drops_.clear();
     shed_every_ = 1;
-    reset_pending_ = true;
+    requestStartOver(StartOver::kTimeJump);
     ++time_jumps_;
+  }
+
+  // Called with gate_mutex_ held: the next sets are learning sets again, and the worker resets
+  // the models before it processes the next one (a relearn request is not weakened by a time
+  // jump that follows it before the next set).
+  void requestStartOver(StartOver kind) {
+    learning_sets_queued_ = 0;
+    background_ready_ = false;
+    start_over_ = std::max(start_over_, kind);
   }
 
   // Called with gate_mutex_ held. Load shedding is a step controller with hysteresis: while
@@ -217,7 +226,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     while (running_) {
       const double now = steadySeconds();
       std::optional<FramePtr> next;
-      bool reset_next = false;
+      StartOver start_over = StartOver::kNone;
       if (outcome_) {
         // The last set's `processed` ack. A reconstructed set's waits for the tracker's answer,
         // so a lockstep source counts the whole closed loop as in flight; and the next set is
@@ -228,27 +237,26 @@ class PsfsNodelet : public nodelet::Nodelet {
           continue;
         }
         next = gate_.pop(now);
-        const bool reset = next && std::exchange(reset_pending_, false);
+        if (next) start_over = std::exchange(start_over_, StartOver::kNone);
         const std::pair<ros::Time, std::string> done = *outcome_;
         outcome_.reset();
         lock.unlock();
         publishProcessed(done.first, done.second.c_str());
         lock.lock();
         if (!next) continue;  // a set pushed meanwhile is popped at once, not after a wait
-        reset_next = reset;
       } else {
         next = gate_.pop(now);
         if (!next) {  // popped and waited under one lock hold: a push always wakes us
           gate_cv_.wait_for(lock, std::chrono::duration<double>(0.2));
           continue;
         }
-        reset_next = std::exchange(reset_pending_, false);
+        start_over = std::exchange(start_over_, StartOver::kNone);
       }
       const int shed_every = shed_every_;
       lock.unlock();
       // Popped under the same lock as the flag was read: a set of the last pass is never taken
       // for the first of the replay.
-      if (reset_next) startOver();
+      if (start_over != StartOver::kNone) startOver(start_over == StartOver::kRelearn);
       process(*next, shed_every);
       lock.lock();
     }
@@ -257,10 +265,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   bool onRelearn(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
     {
       std::lock_guard<std::mutex> lock(gate_mutex_);
-      learning_sets_queued_ = 0;
-      background_ready_ = false;
-      reset_pending_ = true;
-      relearn_requested_ = true;
+      requestStartOver(StartOver::kRelearn);
     }
     {
       std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -277,12 +282,7 @@ class PsfsNodelet : public nodelet::Nodelet {
 
   // Worker thread: after a time jump or a relearn request, the state a fresh nodelet has (a
   // relearn learns the background; it does not load it again from background_load_dir).
-  void startOver() {
-    bool relearn = false;
-    {
-      std::lock_guard<std::mutex> lock(gate_mutex_);
-      relearn = std::exchange(relearn_requested_, false);
-    }
+  void startOver(bool relearn) {
     recon_->resetBackground();
     shed_counter_ = 0;
     {
@@ -602,8 +602,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::optional<std::pair<ros::Time, std::string>> outcome_;  // for psfs/processed, see work()
   uint64_t shed_counter_ = 0;           // worker thread only
   ros::Time last_in_;                   // stamp of the last set taken in (time-jump detection)
-  bool reset_pending_ = false;          // time went back or relearn: start over before the next set
-  bool relearn_requested_ = false;      // the reset is a relearn_background call
+  StartOver start_over_ = StartOver::kNone;  // see requestStartOver()
   ros::ServiceServer relearn_srv_;
   uint64_t time_jumps_ = 0;
   std::atomic<uint64_t> hands_shed_{0};  // hand volume sets given up by load shedding
@@ -628,7 +627,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::string last_error_;
   std::map<std::string, ros::WallTime> warned_;
   // Per-stage times over the whole run (the demo's summary reads the means).
-  tabletop_common::RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
+  RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
 };
 
 }  // namespace psfs

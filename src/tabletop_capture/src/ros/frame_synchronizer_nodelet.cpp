@@ -281,11 +281,9 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     for (size_t i = 0; i < n; ++i) {
       Camera& c = cameras_[i];
       const sensor_msgs::CameraInfoConstPtr& info = c.info;
+      // refreshPose() said why (throttled) when it found no pose.
       if (!info || !c.have_pose || c.pose_frame != info->header.frame_id) {
         ++tf_failures_;
-        NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no pose (tf %s -> %s): set dropped",
-                               c.name.c_str(), world_frame_.c_str(),
-                               info ? info->header.frame_id.c_str() : "?");
         return;
       }
       out->camera_names[i] = c.name;
