@@ -22,7 +22,7 @@ PACKAGES=(
   ros-base-dev ros-base-python-dev rosbash python3-rosbag python3-rostest python3-nose
   libnodeletlib-dev libimage-transport-dev libcv-bridge-dev libtf2-ros-dev
   libmessage-filters-dev librosbag-dev libdiagnostic-updater-dev libvisualization-msgs-dev
-  libstd-srvs-dev
+  libstd-srvs-dev libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libpcl-dev libpcl-conversions-dev libopencv-dev libeigen3-dev libyaml-cpp-dev
   libgtest-dev libbenchmark-dev libzstd-dev libboost-dev
   rviz xvfb x11-apps imagemagick libgl1-mesa-dri

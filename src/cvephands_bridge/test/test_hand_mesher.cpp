@@ -18,7 +18,10 @@
 #include <tabletop_msgs/HandMeshes.h>
 #include <tabletop_msgs/HandVolumes.h>
 
+#include <dynamic_reconfigure/client.h>
+
 #include "ball_volume.h"
+#include "cvephands_bridge/HandMesherTuningConfig.h"
 #include "tabletop_common/ros/test_support.h"
 
 namespace {
@@ -149,6 +152,58 @@ TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
   std::printf("[mesher] diagnostics: %s ms per hand, %s triangles per hand\n",
               diag.get("meshing per hand (ms)").c_str(), diag.get("triangles per hand").c_str());
   EXPECT_EQ(diag.get("meshes"), "4");
+}
+
+// Live tuning (dynamic_reconfigure): iso 0.85 moves the surface of the ball's ramp (0.25 per
+// voxel, 0.6 on the sphere) one voxel inwards: (0.85 - 0.6) / 0.25 = 1 voxel.
+TEST(HandMesher, IsoIsTunedLive) {
+  ros::NodeHandle nh;
+  std::mutex m;
+  std::vector<tabletop_msgs::HandMeshes::ConstPtr> meshes;
+  boost::function<void(const tabletop_msgs::HandMeshes::ConstPtr&)> on_meshes =
+      [&](const tabletop_msgs::HandMeshes::ConstPtr& x) {
+        std::lock_guard<std::mutex> l(m);
+        meshes.push_back(x);
+      };
+  auto sub = nh.subscribe<tabletop_msgs::HandMeshes>("/tabletop/cve/hand_mesh_data", 10, on_meshes);
+  ros::Publisher pub = nh.advertise<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 5);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0));
+  dynamic_reconfigure::Client<cvephands_bridge::HandMesherTuningConfig> client("/tabletop/hand_mesher");
+  cvephands_bridge::HandMesherTuningConfig now;
+  ASSERT_TRUE(client.getCurrentConfiguration(now, ros::Duration(5.0)));
+  EXPECT_DOUBLE_EQ(now.iso, 0.6);  // the server starts from the file, not from the .cfg
+  now.iso = 0.85;
+  ASSERT_TRUE(client.setConfiguration(now));
+  const Eigen::Vector3d o(-0.30, -0.20, 0.0);
+  auto v = boost::make_shared<tabletop_msgs::HandVolumes>();
+  v->header.stamp = ros::Time(200.0);
+  v->target_ids = {7};
+  v->volumes = {ball(o)};
+  pub.publish(v);
+  ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return !meshes.empty(); }, 10.0));
+  std::lock_guard<std::mutex> l(m);
+  ASSERT_EQ(meshes[0]->meshes.size(), 1u);
+  const auto& mesh = meshes[0]->meshes[0];
+  const Eigen::Vector3d c = o + Eigen::Vector3d::Constant(0.15);
+  // The byte level floor(255 * 0.85) + 0.5 = 216.5 lies at (216.5 / 255 - 0.6) / 0.25 voxel.
+  const double expected = kRadius - kVoxel * (216.5 / 255.0 - 0.6) / 0.25;
+  double worst = 0.0;
+  for (const auto& p : mesh.vertices)
+    worst = std::max(worst, std::abs((Eigen::Vector3d(p.x, p.y, p.z) - c).norm() - expected));
+  std::printf("[mesher] iso 0.85: %zu vertices, worst |r - %.2f mm| %.2f mm\n", mesh.vertices.size(),
+              1e3 * expected, 1e3 * worst);
+  EXPECT_LT(worst, 0.25 * kVoxel);
+}
+
+// One parameter style: a private parameter that is no key of config/hand_mesher.yaml (a typo)
+// stops the stage with its name, instead of silently keeping the default.
+TEST(HandMesher, UnknownParameterStopsTheStage) {
+  ros::param::set("/typo/hand_mesher/isolevel", 0.5);
+  tabletop_common::test_support::DiagnosticsValues diag("typo/hand_mesher: hand meshing");
+  ASSERT_TRUE(loadNodelet("/typo/hand_mesher", "cvephands_bridge/HandMesher"));
+  ASSERT_TRUE(waitFor([&] { return diag.message().find("not started") != std::string::npos; }, 10.0))
+      << diag.message();
+  EXPECT_NE(diag.message().find("~isolevel: unknown parameter"), std::string::npos) << diag.message();
 }
 
 int main(int argc, char** argv) {

@@ -44,6 +44,16 @@ MpfTracker::MpfTracker(const MpfParams& params, uint64_t seed)
   reset();
 }
 
+void MpfTracker::setProcessNoise(double head, double ar1, double ar2, double ar3) {
+  MpfParams p = params_;
+  p.head_noise = head;
+  p.hand_noise_ar1 = ar1;
+  p.hand_noise_ar2 = ar2;
+  p.hand_noise_ar3 = ar3;
+  p.validate();
+  params_ = p;
+}
+
 void MpfTracker::reset() {
   rng_.seed(seed_);
   int begin = 0;

@@ -67,6 +67,20 @@ Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const Reconstr
 
 Reconstructor::~Reconstructor() = default;
 
+void Reconstructor::setFusionThresholds(double body, double skin, double hand) {
+  PsfsOptions b = params_.body, s = params_.skin, h = params_.hand;
+  b.threshold = body;
+  s.threshold = skin;
+  h.threshold = hand;
+  PsfsFusion fb(b), fs(s), fh(h);  // each checks its options before anything changes
+  body_fusion_ = fb;
+  skin_fusion_ = fs;
+  hand_fusion_ = fh;
+  params_.body = b;
+  params_.skin = s;
+  params_.hand = h;
+}
+
 bool Reconstructor::backgroundReady() const {
   if (backgrounds_.empty()) return false;
   for (const auto& b : backgrounds_)

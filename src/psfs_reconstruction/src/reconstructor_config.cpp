@@ -1,76 +1,17 @@
 #include "psfs_reconstruction/reconstructor_config.h"
 
-#include <functional>
-#include <map>
 #include <stdexcept>
-
-#include <yaml-cpp/yaml.h>
 
 namespace psfs {
 namespace {
 
-// Reads a YAML map whose keys must all be known: each key maps to a setter.
-class Section {
- public:
-  Section(const YAML::Node& node, const std::string& where) : node_(node), where_(where) {}
-  template <class T>
-  Section& field(const std::string& key, T* out) {
-    setters_[key] = [this, key, out](const YAML::Node& n) {
-      try {
-        *out = n.as<T>();
-      } catch (const YAML::Exception&) {
-        throw std::runtime_error(where_ + key + ": wrong type");
-      }
-    };
-    return *this;
-  }
-  Section& vector3(const std::string& key, Eigen::Vector3d* out) {
-    setters_[key] = [this, key, out](const YAML::Node& n) { *out = readVec<double>(n, key); };
-    return *this;
-  }
-  Section& vector3i(const std::string& key, Eigen::Vector3i* out) {
-    setters_[key] = [this, key, out](const YAML::Node& n) { *out = readVec<int>(n, key); };
-    return *this;
-  }
-  Section& child(const std::string& key, std::function<void(const YAML::Node&, const std::string&)> f) {
-    setters_[key] = [this, key, f](const YAML::Node& n) { f(n, where_ + key + "/"); };
-    return *this;
-  }
-  void read() {
-    if (!node_) return;
-    if (!node_.IsMap()) throw std::runtime_error(where_ + ": expected a map");
-    for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
-      auto it = setters_.find(key);
-      if (it == setters_.end()) throw std::runtime_error(where_ + key + ": unknown key");
-      it->second(kv.second);
-    }
-  }
-
- private:
-  template <class T>
-  Eigen::Matrix<T, 3, 1> readVec(const YAML::Node& n, const std::string& key) const {
-    if (!n.IsSequence() || n.size() != 3)
-      throw std::runtime_error(where_ + key + ": expected a list of 3 numbers");
-    try {
-      return Eigen::Matrix<T, 3, 1>(n[0].as<T>(), n[1].as<T>(), n[2].as<T>());
-    } catch (const YAML::Exception&) {
-      throw std::runtime_error(where_ + key + ": expected a list of 3 numbers");
-    }
-  }
-  YAML::Node node_;
-  std::string where_;
-  std::map<std::string, std::function<void(const YAML::Node&)>> setters_;
-};
-
-void readFusion(const YAML::Node& n, const std::string& where, PsfsOptions* o) {
-  Section(n, where)
-      .field("threshold", &o->threshold)
-      .field("occluded_views", &o->occluded_views)
-      .field("drop_threshold", &o->drop_threshold)
-      .field("min_views", &o->min_views)
-      .field("multi_projection", &o->multi_projection)
-      .read();
+void addFusionKeys(const std::string& section, PsfsOptions* o, tabletop_common::ConfigSchema* s) {
+  const std::string k = "fusion/" + section + "/";
+  s->add(k + "threshold", &o->threshold)
+      .add(k + "occluded_views", &o->occluded_views)
+      .add(k + "drop_threshold", &o->drop_threshold)
+      .add(k + "min_views", &o->min_views)
+      .add(k + "multi_projection", &o->multi_projection);
 }
 
 std::string directoryOf(const std::string& path) {
@@ -80,100 +21,63 @@ std::string directoryOf(const std::string& path) {
 
 }  // namespace
 
-ReconstructorConfig loadReconstructorConfig(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": cannot read: " + e.what());
-  }
-  ReconstructorConfig c;
+void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema* s) {
+  ReconstructorParams& p = c->params;
+  s->add("pixel_classifier/skin_model", &c->skin_model_path)
+      .add("pixel_classifier/foreground_outlier", &p.classifier.foreground_outlier)
+      .add("pixel_classifier/skin_outlier", &p.classifier.skin_outlier)
+      .add("pixel_classifier/shadow_suppression", &p.classifier.shadow_suppression)
+      .add("pixel_classifier/shadow_chroma_radius", &p.classifier.shadow_chroma_radius)
+      .add("pixel_classifier/shadow_min_intensity_ratio", &p.classifier.shadow_min_intensity_ratio)
+      .add("pixel_classifier/shadow_max_intensity_ratio", &p.classifier.shadow_max_intensity_ratio)
+      .add("pixel_classifier/min_chroma_intensity", &p.classifier.min_chroma_intensity);
+  s->add("background_model/learning_frames", &p.background.learning_frames)
+      .add("background_model/learning_rate", &p.background.learning_rate)
+      .add("background_model/min_sigma_rg", &p.background.min_sigma_rg)
+      .add("background_model/min_sigma_intensity", &p.background.min_sigma_intensity)
+      .add("background_model/learning_change_sigmas", &p.background.learning_change_sigmas)
+      .add("background_model/learning_change_fraction", &p.background.learning_change_fraction)
+      .add("background_model/min_learning_frames", &p.background.min_learning_frames)
+      .add("background_model/update", &p.update_background)
+      .add("background_model/mask_margin_px", &p.mask_margin_px);
+  s->add("volume/workspace_min", &p.workspace.min_corner)
+      .add("volume/workspace_size", &p.workspace.size)
+      .add("volume/dims", &p.dims)
+      .add("volume/hull_occupancy_foreground", &p.hull_occupancy_foreground)
+      .add("volume/hull_occupancy_skin", &p.hull_occupancy_skin);
+  addFusionKeys("body", &p.body, s);
+  addFusionKeys("skin", &p.skin, s);
+  addFusionKeys("hand", &p.hand, s);
+  s->add("hand_volumes/edge", &p.hand_roi_edge)
+      .add("hand_volumes/voxels", &p.hand_roi_voxels)
+      .add("hand_volumes/topic", &c->nodelet.hand_roi_topic)
+      .add("hand_volumes/max_age", &c->nodelet.hand_roi_max_age)
+      .add("hand_volumes/max_hands", &c->nodelet.max_hand_rois);
+  s->add("camera_checks/dark_camera_fraction", &p.dark_camera_fraction)
+      .add("camera_checks/saturated_warning_fraction", &p.saturated_warning_fraction);
+  s->add("nodelet/threads", &p.threads)
+      .add("nodelet/queue_size", &c->nodelet.queue_size)
+      .add("nodelet/wait_for_tracker", &c->nodelet.wait_for_tracker)
+      .add("nodelet/tracker_timeout", &c->nodelet.tracker_timeout)
+      .add("nodelet/load_shedding", &c->nodelet.load_shedding)
+      .add("nodelet/shed_drop_fraction", &c->nodelet.shed_drop_fraction)
+      .add("nodelet/foreground_mask_topics", &c->nodelet.foreground_mask_topics)
+      .add("nodelet/background_load_dir", &c->nodelet.background_load_dir)
+      .add("nodelet/background_save_dir", &c->nodelet.background_save_dir)
+      .add("nodelet/publish_clouds", &c->nodelet.publish_clouds);
+  // The short names the nodelet has always taken as private parameters, and the live ones
+  // (cfg/Psfs.cfg).
+  for (const char* k : {"threads", "queue_size", "wait_for_tracker", "tracker_timeout", "load_shedding",
+                        "background_load_dir", "background_save_dir"})
+    s->alias(k, std::string("nodelet/") + k);
+  for (const char* v : {"body", "skin", "hand"})
+    s->alias(std::string(v) + "_threshold", std::string("fusion/") + v + "/threshold");
+}
+
+void finishReconstructorConfig(const std::string& path, ReconstructorConfig* cfg) {
+  ReconstructorConfig& c = *cfg;
   ReconstructorParams& p = c.params;
-  std::string skin_model = "skin_gmm.yaml";
   const std::string where = path + ": ";
-  try {
-    Section(root, where)
-        .child("pixel_classifier",
-               [&](const YAML::Node& n, const std::string& w) {
-                 Section(n, w)
-                     .field("skin_model", &skin_model)
-                     .field("foreground_outlier", &p.classifier.foreground_outlier)
-                     .field("skin_outlier", &p.classifier.skin_outlier)
-                     .field("shadow_suppression", &p.classifier.shadow_suppression)
-                     .field("shadow_chroma_radius", &p.classifier.shadow_chroma_radius)
-                     .field("shadow_min_intensity_ratio", &p.classifier.shadow_min_intensity_ratio)
-                     .field("shadow_max_intensity_ratio", &p.classifier.shadow_max_intensity_ratio)
-                     .field("min_chroma_intensity", &p.classifier.min_chroma_intensity)
-                     .read();
-               })
-        .child("background_model",
-               [&](const YAML::Node& n, const std::string& w) {
-                 Section(n, w)
-                     .field("learning_frames", &p.background.learning_frames)
-                     .field("learning_rate", &p.background.learning_rate)
-                     .field("min_sigma_rg", &p.background.min_sigma_rg)
-                     .field("min_sigma_intensity", &p.background.min_sigma_intensity)
-                     .field("learning_change_sigmas", &p.background.learning_change_sigmas)
-                     .field("learning_change_fraction", &p.background.learning_change_fraction)
-                     .field("min_learning_frames", &p.background.min_learning_frames)
-                     .field("update", &p.update_background)
-                     .field("mask_margin_px", &p.mask_margin_px)
-                     .read();
-               })
-        .child("volume",
-               [&](const YAML::Node& n, const std::string& w) {
-                 Section(n, w)
-                     .vector3("workspace_min", &p.workspace.min_corner)
-                     .vector3("workspace_size", &p.workspace.size)
-                     .vector3i("dims", &p.dims)
-                     .field("hull_occupancy_foreground", &p.hull_occupancy_foreground)
-                     .field("hull_occupancy_skin", &p.hull_occupancy_skin)
-                     .read();
-               })
-        .child("fusion",
-               [&](const YAML::Node& n, const std::string& w) {
-                 Section(n, w)
-                     .child("body", [&](const YAML::Node& m, const std::string& v) { readFusion(m, v, &p.body); })
-                     .child("skin", [&](const YAML::Node& m, const std::string& v) { readFusion(m, v, &p.skin); })
-                     .child("hand", [&](const YAML::Node& m, const std::string& v) { readFusion(m, v, &p.hand); })
-                     .read();
-               })
-        .child("hand_volumes",
-               [&](const YAML::Node& n, const std::string& w) {
-                 Section(n, w)
-                     .field("edge", &p.hand_roi_edge)
-                     .field("voxels", &p.hand_roi_voxels)
-                     .field("topic", &c.nodelet.hand_roi_topic)
-                     .field("max_age", &c.nodelet.hand_roi_max_age)
-                     .field("max_hands", &c.nodelet.max_hand_rois)
-                     .read();
-               })
-        .child("camera_checks",
-               [&](const YAML::Node& n, const std::string& w) {
-                 Section(n, w)
-                     .field("dark_camera_fraction", &p.dark_camera_fraction)
-                     .field("saturated_warning_fraction", &p.saturated_warning_fraction)
-                     .read();
-               })
-        .child("nodelet",
-               [&](const YAML::Node& n, const std::string& w) {
-                 Section(n, w)
-                     .field("threads", &p.threads)
-                     .field("queue_size", &c.nodelet.queue_size)
-                     .field("wait_for_tracker", &c.nodelet.wait_for_tracker)
-                     .field("tracker_timeout", &c.nodelet.tracker_timeout)
-                     .field("load_shedding", &c.nodelet.load_shedding)
-                     .field("shed_drop_fraction", &c.nodelet.shed_drop_fraction)
-                     .field("foreground_mask_topics", &c.nodelet.foreground_mask_topics)
-                     .field("background_load_dir", &c.nodelet.background_load_dir)
-                     .field("background_save_dir", &c.nodelet.background_save_dir)
-                     .field("publish_clouds", &c.nodelet.publish_clouds)
-                     .read();
-               })
-        .read();
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(where + e.what());
-  }
   // The structs check their own ranges; report those against the file too.
   try {
     p.validate();
@@ -190,8 +94,16 @@ ReconstructorConfig loadReconstructorConfig(const std::string& path) {
     throw std::runtime_error(where + "nodelet/tracker_timeout: must lie in [0, 600] s");
   if (!(c.nodelet.shed_drop_fraction > 0 && c.nodelet.shed_drop_fraction < 1))
     throw std::runtime_error(where + "nodelet/shed_drop_fraction: must lie in (0, 1)");
-  c.skin_model_path = (!skin_model.empty() && skin_model[0] == '/') ? skin_model
-                                                                     : directoryOf(path) + "/" + skin_model;
+  const std::string& skin_model = c.skin_model_path;
+  if (!skin_model.empty() && skin_model[0] != '/') c.skin_model_path = directoryOf(path) + "/" + skin_model;
+}
+
+ReconstructorConfig loadReconstructorConfig(const std::string& path) {
+  ReconstructorConfig c;
+  tabletop_common::ConfigSchema schema;
+  addReconstructorKeys(&c, &schema);
+  schema.loadFile(path);
+  finishReconstructorConfig(path, &c);
   return c;
 }
 

@@ -22,6 +22,10 @@
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
 
+#include <dynamic_reconfigure/client.h>
+
+#include "psfs_reconstruction/PsfsTuningConfig.h"
+#include "psfs_reconstruction/reconstructor_config.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
 #include "tabletop_common/ros/test_support.h"
 #include "tabletop_sim/simulated_rig.h"
@@ -215,6 +219,21 @@ TEST(PsfsPipeline, SimRigToVolumes) {
       << relearn.response.message;
   EXPECT_TRUE(waitFor([&] { return diag.message().find("learning the background (0/25)") !=
                                    std::string::npos; }, 5.0)) << diag.message();
+
+  // Live tuning: the server starts from the file's thresholds (not the .cfg's), takes a new one
+  // and shows it on the parameter server under the alias of fusion/skin/threshold.
+  dynamic_reconfigure::Client<psfs_reconstruction::PsfsTuningConfig> tuning("/tabletop/psfs");
+  psfs_reconstruction::PsfsTuningConfig live;
+  ASSERT_TRUE(tuning.getCurrentConfiguration(live, ros::Duration(5.0)));
+  const psfs::ReconstructorConfig file = psfs::loadReconstructorConfig(PSFS_RECONSTRUCTION_CONFIG_DIR "/psfs.yaml");
+  EXPECT_DOUBLE_EQ(live.body_threshold, file.params.body.threshold);
+  EXPECT_DOUBLE_EQ(live.skin_threshold, file.params.skin.threshold);
+  EXPECT_DOUBLE_EQ(live.hand_threshold, file.params.hand.threshold);
+  live.skin_threshold = 0.8;
+  ASSERT_TRUE(tuning.setConfiguration(live));
+  double on_server = 0.0;
+  EXPECT_TRUE(ros::param::get("/tabletop/psfs/skin_threshold", on_server));
+  EXPECT_DOUBLE_EQ(on_server, 0.8);
 }
 
 int main(int argc, char** argv) {

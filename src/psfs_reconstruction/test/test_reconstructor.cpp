@@ -173,6 +173,19 @@ TEST_F(ReconstructorTest, BackProjectedVolumeCoversThePerson) {
   }
 }
 
+// Live tuning: the three thresholds change together, and a value PsfsFusion rejects changes none.
+TEST_F(ReconstructorTest, FusionThresholdsAreTunedLive) {
+  Reconstructor r(skin(), params_);
+  r.setFusionThresholds(0.8, 0.85, 0.9);
+  EXPECT_EQ(r.params().body.threshold, 0.8);
+  EXPECT_EQ(r.params().skin.threshold, 0.85);
+  EXPECT_EQ(r.params().hand.threshold, 0.9);
+  EXPECT_THROW(r.setFusionThresholds(0.7, 0.4, 0.7), std::invalid_argument);  // t must exceed 0.5
+  EXPECT_EQ(r.params().body.threshold, 0.8);
+  EXPECT_EQ(r.params().skin.threshold, 0.85);
+  EXPECT_EQ(r.params().body.multi_projection, params_.body.multi_projection);  // the rest stays
+}
+
 TEST_F(ReconstructorTest, BadFrameSetsAreRejectedAndTheStateSurvives) {
   Reconstructor r(skin(), params_);
   learn(&r);
@@ -370,6 +383,20 @@ TEST(ReconstructorConfig, ShippedFileMatchesTheDefaults) {
   EXPECT_EQ(c.nodelet.background_save_dir, n.background_save_dir);
   EXPECT_EQ(c.nodelet.publish_clouds, n.publish_clouds);
   EXPECT_TRUE(psfs_test::fileExists(c.skin_model_path)) << c.skin_model_path;
+}
+
+// The aliases the nodelet takes as private parameters (and dynamic_reconfigure writes back).
+TEST(ReconstructorConfig, AliasesOverrideTheirKeys) {
+  ReconstructorConfig c;
+  tabletop_common::ConfigSchema schema;
+  addReconstructorKeys(&c, &schema);
+  schema.set("skin_threshold", YAML::Node(0.8), "rosparam ~");
+  schema.set("threads", YAML::Node(2), "rosparam ~");
+  schema.set("fusion/hand/threshold", YAML::Node(0.7), "rosparam ~");
+  EXPECT_EQ(c.params.skin.threshold, 0.8);
+  EXPECT_EQ(c.params.threads, 2);
+  EXPECT_EQ(c.params.hand.threshold, 0.7);
+  EXPECT_THROW(schema.set("skin_treshold", YAML::Node(0.8), "rosparam ~"), std::runtime_error);
 }
 
 TEST(ReconstructorConfig, BadFilesNameTheFileAndTheKey) {

@@ -8,7 +8,9 @@
 // JPEG crop around the tracked head from the camera facing the user (face_video.h), at most
 // face_video_fps per second.
 //
-// Private parameters: config/cve_bridge.yaml documents each.
+// Parameters: ~config_file (default $(find cvephands_bridge)/config/cve_bridge.yaml, every key
+// documented there) read strictly, then any private parameter named like a key overrides it; an
+// unknown one stops the stage (tabletop_common/ros/config_overrides.h).
 #include <atomic>
 #include <map>
 #include <memory>
@@ -18,6 +20,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <ros/package.h>
 #include <ros/ros.h>
 
 #include <tabletop_msgs/HandVolumes.h>
@@ -28,6 +31,7 @@
 #include "cvephands_bridge/hand_stream_codec.h"
 #include "cvephands_bridge/room_client.h"
 #include "tabletop_capture/ros/frame_set_view.h"
+#include "tabletop_common/ros/config_overrides.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_common/running_stats.h"
 
@@ -42,21 +46,36 @@ class CveBridgeNodelet : public nodelet::Nodelet {
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
 
     int port = 8765, bits = 2, keyframes = 25, queue = 16;
-    pnh.param("server_host", options_.host, std::string("127.0.0.1"));
-    pnh.param("server_port", port, port);
-    pnh.param("room", options_.join.room, std::string("tabletop"));
-    pnh.param("name", options_.join.name, std::string("rig"));
-    pnh.param("token", options_.join.token, std::string());
-    pnh.param("send_queue", queue, queue);
-    pnh.param("connect_timeout", options_.connect_timeout, 1.0);
-    pnh.param("code_bits", bits, bits);
-    pnh.param("keyframe_interval", keyframes, keyframes);
     double reconnect = 2.0;
-    pnh.param("reconnect_interval", reconnect, reconnect);
-    pnh.param("face_video", face_video_, true);
-    pnh.param("face_video_fps", face_fps_, 10.0);
-    pnh.param("face_video_size", face_options_.size, face_options_.size);
-    pnh.param("face_video_quality", face_options_.jpeg_quality, face_options_.jpeg_quality);
+    options_.host = "127.0.0.1";
+    options_.join.room = "tabletop";
+    options_.join.name = "rig";
+    options_.connect_timeout = 1.0;
+    face_video_ = true;
+    face_fps_ = 10.0;
+    try {
+      tabletop_common::ConfigSchema schema;
+      schema.add("server_host", &options_.host)
+          .add("server_port", &port)
+          .add("room", &options_.join.room)
+          .add("name", &options_.join.name)
+          .add("token", &options_.join.token)
+          .add("send_queue", &queue)
+          .add("connect_timeout", &options_.connect_timeout)
+          .add("code_bits", &bits)
+          .add("keyframe_interval", &keyframes)
+          .add("reconnect_interval", &reconnect)
+          .add("face_video", &face_video_)
+          .add("face_video_fps", &face_fps_)
+          .add("face_video_size", &face_options_.size)
+          .add("face_video_quality", &face_options_.jpeg_quality);
+      tabletop_common::loadConfigWithOverrides(
+          pnh, ros::package::getPath("cvephands_bridge") + "/config/cve_bridge.yaml", schema, {});
+    } catch (const std::exception& e) {
+      fatal_ = e.what();
+      NODELET_FATAL("cve_bridge: not started: bad parameters: %s", e.what());
+      return;
+    }
     options_.port = static_cast<uint16_t>(port);
     options_.send_queue_length = static_cast<size_t>(std::max(1, queue));
     options_.join.role = room::Role::kRig;
@@ -70,6 +89,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       encoder_options_.validate();
       if (port < 1 || port > 65535) throw std::invalid_argument("server_port must be in 1..65535");
       if (!(reconnect > 0.0)) throw std::invalid_argument("reconnect_interval must be > 0");
+      if (queue < 1) throw std::invalid_argument("send_queue must be >= 1");
+      if (!(options_.connect_timeout > 0.0)) throw std::invalid_argument("connect_timeout must be > 0");
       face_options_.validate();
       if (!(face_fps_ > 0.0 && face_fps_ <= 60.0)) throw std::invalid_argument("face_video_fps must be in (0, 60]");
     } catch (const std::exception& e) {

@@ -4,7 +4,10 @@
 // (MarkerArray: one TRIANGLE_LIST marker per hand id, deleted when that hand is no longer
 // meshed). A thin wrapper around cvephands::MarchingCubes.
 //
-// Private parameters: config/hand_mesher.yaml (loaded by the launch files) documents each.
+// Parameters: ~config_file (default $(find cvephands_bridge)/config/hand_mesher.yaml, every key
+// documented there) read strictly, then any private parameter named like a key overrides it; an
+// unknown one stops the stage (tabletop_common/ros/config_overrides.h). Live tuning
+// (dynamic_reconfigure, cfg/HandMesherTuning.cfg): iso.
 // Bad input (data size not matching the dims, non-finite geometry, ids and volumes of different
 // counts) is reported (throttled) and counted in the diagnostics; the other hands of the message
 // are still meshed.
@@ -20,15 +23,20 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <ros/package.h>
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <tabletop_msgs/HandMeshes.h>
 #include <tabletop_msgs/HandVolumes.h>
 
+#include "cvephands_bridge/HandMesherTuningConfig.h"  // generated from cfg/HandMesherTuning.cfg
 #include "cvephands_bridge/marching_cubes.h"
+#include "cvephands_bridge/mesh/hand_mesher_config.h"
 #include "cvephands_bridge/mesh_components.h"
 #include "cvephands_bridge/ros/mesh_conversions.h"
+#include "tabletop_common/ros/config_overrides.h"
+#include "tabletop_common/ros/live_tuning.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_common/running_stats.h"
 
@@ -41,16 +49,35 @@ class HandMesherNodelet : public nodelet::Nodelet {
     diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "hand_mesher", "hand meshing",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
+    HandMesherConfig cfg;
     try {
-      mc_ = std::make_unique<MarchingCubes>(loadOptions(pnh));
+      tabletop_common::ConfigSchema schema;
+      addHandMesherKeys(&cfg, &schema);
+      tabletop_common::loadConfigWithOverrides(
+          pnh, ros::package::getPath("cvephands_bridge") + "/config/hand_mesher.yaml", schema, {});
+      mc_ = std::make_unique<MarchingCubes>(marchingCubesOptions(cfg));
     } catch (const std::exception& e) {
       fatal_ = e.what();
       NODELET_FATAL("hand_mesher: not started: bad parameters: %s", e.what());
       return;
     }
-    pnh.param("publish_markers", publish_markers_, true);
-    pnh.param("min_component_triangles", min_component_triangles_, 64);
-    pnh.param("world_frame", world_frame_, std::string("world"));
+    publish_markers_ = cfg.publish_markers;
+    min_component_triangles_ = cfg.min_component_triangles;
+    world_frame_ = cfg.world_frame;
+    color_.r = float(cfg.marker_color[0]), color_.g = float(cfg.marker_color[1]);
+    color_.b = float(cfg.marker_color[2]), color_.a = float(cfg.marker_color[3]);
+    cvephands_bridge::HandMesherTuningConfig live;
+    live.iso = cfg.iso;
+    tuning_ = std::make_unique<tabletop_common::LiveTuning<cvephands_bridge::HandMesherTuningConfig>>(
+        pnh, live,
+        [this](const cvephands_bridge::HandMesherTuningConfig& c) {
+          MarchingCubesOptions o = mc_->options();
+          o.iso = isoByteLevel(c.iso);  // throws for a value out of (0, 1)
+          auto mc = std::make_unique<MarchingCubes>(o);
+          std::lock_guard<std::mutex> lock(mutex_);
+          mc_ = std::move(mc);
+        },
+        "hand_mesher");
     mesh_pub_ = nh.advertise<tabletop_msgs::HandMeshes>("cve/hand_mesh_data", 5);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("cve/hand_meshes", 2);
     // Sets are dropped only at the pSfS gate; later stages queue enough never to drop one.
@@ -59,29 +86,6 @@ class HandMesherNodelet : public nodelet::Nodelet {
                  sub_.getTopic().c_str(), mesh_pub_.getTopic().c_str(),
                  marker_pub_.getTopic().c_str(), mc_->options().iso,
                  mc_->options().mode == MeshingMode::kBinary ? "binary" : "probabilistic");
-  }
-
-  MarchingCubesOptions loadOptions(ros::NodeHandle& pnh) {
-    MarchingCubesOptions o;
-    double iso = 0.6;
-    pnh.param("iso", iso, iso);
-    if (!std::isfinite(iso) || !(iso > 0.0) || !(iso < 1.0))
-      throw std::invalid_argument("iso must be a probability in (0, 1)");
-    o.iso = static_cast<float>(std::floor(255.0 * iso) + 0.5);
-    if (o.iso >= 255.0f) o.iso = 254.5f;
-    std::string mode = "probabilistic";
-    pnh.param("mode", mode, mode);
-    if (mode == "binary")
-      o.mode = MeshingMode::kBinary;
-    else if (mode != "probabilistic")
-      throw std::invalid_argument("mode must be 'probabilistic' or 'binary', not '" + mode + "'");
-    pnh.param("close_at_border", o.close_at_border, o.close_at_border);
-    pnh.param("threads", o.threads, 1);
-    std::vector<double> c{0.93, 0.72, 0.60, 1.0};
-    pnh.param("marker_color", c, c);
-    if (c.size() != 4) throw std::invalid_argument("marker_color must be [r, g, b, a]");
-    color_.r = float(c[0]), color_.g = float(c[1]), color_.b = float(c[2]), color_.a = float(c[3]);
-    return o;
   }
 
   void onVolumes(const tabletop_msgs::HandVolumes::ConstPtr& msg) {
@@ -174,7 +178,8 @@ class HandMesherNodelet : public nodelet::Nodelet {
   ros::Subscriber sub_;
   ros::Publisher mesh_pub_, marker_pub_;
   std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
-  std::mutex mutex_;
+  std::mutex mutex_;  // guards mc_ (live tuning replaces it) and everything below
+  std::unique_ptr<tabletop_common::LiveTuning<cvephands_bridge::HandMesherTuningConfig>> tuning_;
   std::set<uint32_t> last_ids_;
   tabletop_common::RateMeter rate_;
   tabletop_common::GrowthMeter rejections_;

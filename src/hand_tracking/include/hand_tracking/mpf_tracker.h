@@ -87,6 +87,10 @@ class MpfTracker {
   // Back to the state after construction (same seed: the same input gives the same output).
   void reset();
   const MpfParams& params() const { return params_; }
+  // Live tuning: the process noise of the dynamics (MpfParams::head_noise, hand_noise_ar*) from
+  // the next update on. Throws std::invalid_argument (nothing changed) for values validate()
+  // rejects.
+  void setProcessNoise(double head, double ar1, double ar2, double ar3);
   double time() const { return time_; }      // sum of the dt so far (s)
   uint64_t frames() const { return frames_; }  // updates since construction / reset()
 

@@ -4,7 +4,10 @@
 // takes the active hands of hands/targets as the ROIs of its high-resolution hand volumes (the
 // closed loop of thesis 4.3). A thin wrapper around hand_tracking::MpfTracker.
 //
-// Private parameters: every field of config/mpf.yaml (loaded by the launch files), see there.
+// Parameters: ~config_file (default $(find hand_tracking)/config/mpf.yaml, every key documented
+// there) read strictly, then any private parameter named like a key overrides it; an unknown
+// one stops the stage (tabletop_common/ros/config_overrides.h). Live tuning (dynamic_reconfigure,
+// cfg/MpfTuning.cfg): head_noise, hand_noise_ar1..3.
 #include <map>
 #include <memory>
 #include <mutex>
@@ -14,6 +17,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <ros/package.h>
 #include <ros/ros.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -21,66 +25,17 @@
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
 
+#include "hand_tracking/MpfTuningConfig.h"  // generated from cfg/MpfTuning.cfg
+#include "hand_tracking/mpf_config.h"
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
+#include "tabletop_common/ros/config_overrides.h"
+#include "tabletop_common/ros/live_tuning.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_common/running_stats.h"
 
 namespace hand_tracking {
 namespace {
-
-void vec3(ros::NodeHandle& nh, const std::string& name, Eigen::Vector3d* v) {
-  std::vector<double> x;
-  if (!nh.getParam(name, x)) return;
-  if (x.size() != 3) throw std::invalid_argument(name + " must be a list of 3 numbers");
-  *v = Eigen::Vector3d(x[0], x[1], x[2]);
-}
-
-// Every MpfParams field from the private namespace (missing ones keep their defaults).
-MpfParams loadParams(ros::NodeHandle& nh) {
-  MpfParams p;
-  nh.param("hand_particles", p.hand_particles, p.hand_particles);
-  nh.param("head_particles", p.head_particles, p.head_particles);
-  vec3(nh, "head_box", &p.head_box);
-  vec3(nh, "hand_box", &p.hand_box);
-  vec3(nh, "frontal_direction", &p.frontal_direction);
-  nh.param("frontal_plane_thickness", p.frontal_plane_thickness, p.frontal_plane_thickness);
-  nh.param("frontal_plane_gap", p.frontal_plane_gap, p.frontal_plane_gap);
-  nh.param("likelihood_exponent", p.likelihood_exponent, p.likelihood_exponent);
-  nh.param("smooth_boxes", p.smooth_boxes, p.smooth_boxes);
-  nh.param("reference_dt", p.reference_dt, p.reference_dt);
-  nh.param("head_noise", p.head_noise, p.head_noise);
-  nh.param("hand_noise_ar1", p.hand_noise_ar1, p.hand_noise_ar1);
-  nh.param("hand_noise_ar2", p.hand_noise_ar2, p.hand_noise_ar2);
-  nh.param("hand_noise_ar3", p.hand_noise_ar3, p.hand_noise_ar3);
-  nh.param("max_speed", p.max_speed, p.max_speed);
-  nh.param("head_init_weight", p.head_init_weight, p.head_init_weight);
-  nh.param("hand_init_weight", p.hand_init_weight, p.hand_init_weight);
-  nh.param("birth_min_distance", p.birth_min_distance, p.birth_min_distance);
-  nh.param("birth_spread", p.birth_spread, p.birth_spread);
-  nh.param("search_skin_threshold", p.search_skin_threshold, p.search_skin_threshold);
-  nh.param("search_skin_fraction", p.search_skin_fraction, p.search_skin_fraction);
-  nh.param("kmeans_max_iterations", p.kmeans_max_iterations, p.kmeans_max_iterations);
-  nh.param("head_track_weight", p.head_track_weight, p.head_track_weight);
-  nh.param("hand_track_weight", p.hand_track_weight, p.hand_track_weight);
-  nh.param("merge_distance", p.merge_distance, p.merge_distance);
-  nh.param("split_distance", p.split_distance, p.split_distance);
-  nh.param("min_mixture_weight", p.min_mixture_weight, p.min_mixture_weight);
-  nh.param("identity_memory", p.identity_memory, p.identity_memory);
-  nh.param("head_hand_distance", p.head_hand_distance, p.head_hand_distance);
-  vec3(nh, "workspace_min", &p.workspace_min);
-  vec3(nh, "workspace_size", &p.workspace_size);
-  nh.param("refine_hand_centroid", p.refine_hand_centroid, p.refine_hand_centroid);
-  vec3(nh, "hand_centroid_box", &p.hand_centroid_box);
-  nh.param("hand_centroid_threshold", p.hand_centroid_threshold, p.hand_centroid_threshold);
-  nh.param("refine_head_centroid", p.refine_head_centroid, p.refine_head_centroid);
-  vec3(nh, "head_centroid_box", &p.head_centroid_box);
-  nh.param("head_centroid_threshold", p.head_centroid_threshold, p.head_centroid_threshold);
-  nh.param("centroid_iterations", p.centroid_iterations, p.centroid_iterations);
-  nh.param("threads", p.threads, p.threads);
-  p.validate();
-  return p;
-}
 
 }  // namespace
 
@@ -91,18 +46,23 @@ class MpfNodelet : public nodelet::Nodelet {
     diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "mpf", "mpf hand tracking",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
-    int seed = 1;
-    pnh.param("seed", seed, seed);
-    pnh.param("publish_particles", publish_particles_, false);
-    pnh.param("world_frame", world_frame_, std::string("world"));
-    pnh.param("tf_prefix", tf_prefix_, std::string("tabletop/"));
+    MpfConfig cfg;
     try {
-      tracker_ = std::make_unique<MpfTracker>(loadParams(pnh), static_cast<uint64_t>(seed));
+      tabletop_common::ConfigSchema schema;
+      addMpfKeys(&cfg, &schema);
+      const std::string file = tabletop_common::loadConfigWithOverrides(
+          pnh, ros::package::getPath("hand_tracking") + "/config/mpf.yaml", schema, {});
+      finishMpfConfig(file + " (with the private parameters): ", &cfg);
+      tracker_ = std::make_unique<MpfTracker>(cfg.params, static_cast<uint64_t>(cfg.nodelet.seed));
     } catch (const std::exception& e) {
       fatal_ = e.what();
       NODELET_FATAL("mpf: not started: bad parameters: %s", e.what());
       return;
     }
+    const int seed = cfg.nodelet.seed;
+    publish_particles_ = cfg.nodelet.publish_particles;
+    world_frame_ = cfg.nodelet.world_frame;
+    tf_prefix_ = cfg.nodelet.tf_prefix;
     targets_pub_ = nh.advertise<tabletop_msgs::TrackedTargets>("hands/targets", 5);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("hands/markers", 2);
     tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
@@ -110,6 +70,18 @@ class MpfNodelet : public nodelet::Nodelet {
     // set): these queues never fill, whatever the machine's speed.
     skin_sub_ = nh.subscribe("psfs/skin_volume", 10, &MpfNodelet::onSkin, this);
     body_sub_ = nh.subscribe("psfs/body_volume", 10, &MpfNodelet::onBody, this);
+    MpfTuningConfig live;
+    live.head_noise = cfg.params.head_noise;
+    live.hand_noise_ar1 = cfg.params.hand_noise_ar1;
+    live.hand_noise_ar2 = cfg.params.hand_noise_ar2;
+    live.hand_noise_ar3 = cfg.params.hand_noise_ar3;
+    tuning_ = std::make_unique<tabletop_common::LiveTuning<MpfTuningConfig>>(
+        pnh, live,
+        [this](const MpfTuningConfig& c) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          tracker_->setProcessNoise(c.head_noise, c.hand_noise_ar1, c.hand_noise_ar2, c.hand_noise_ar3);
+        },
+        "mpf");
     NODELET_INFO("mpf: tracking on %s + %s, %d particles per hand, %d for the head, seed %d",
                  skin_sub_.getTopic().c_str(), body_sub_.getTopic().c_str(),
                  tracker_->params().hand_particles, tracker_->params().head_particles, seed);
@@ -293,6 +265,7 @@ class MpfNodelet : public nodelet::Nodelet {
   }
 
   std::unique_ptr<MpfTracker> tracker_;
+  std::unique_ptr<tabletop_common::LiveTuning<MpfTuningConfig>> tuning_;  // after tracker_: goes first
   std::string fatal_, world_frame_, tf_prefix_;
   bool publish_particles_ = false;
   ros::Subscriber skin_sub_, body_sub_;

@@ -136,6 +136,10 @@ class Reconstructor {
                       const std::vector<Eigen::Vector3d>& hand_rois = {},
                       const std::vector<cv::Mat>& foreground_masks = {});
 
+  // Live tuning: the in-hull thresholds t of the three volumes from the next frame set on.
+  // Throws std::invalid_argument (nothing changed) for a value PsfsFusion rejects.
+  void setFusionThresholds(double body, double skin, double hand);
+
   bool backgroundReady() const;
   int numCameras() const { return static_cast<int>(cameras_.size()); }
   // Drops the background models: the next frames are learned again.

@@ -4,12 +4,13 @@
 //
 // Keys are optional (missing = the default in the structs); unknown keys and values of the
 // wrong type or range are errors that name the file and the key, so a typo never silently
-// falls back to a default.
+// falls back to a default (tabletop_common/config_schema.h, the loader of every stage).
 #pragma once
 
 #include <string>
 
 #include "psfs_reconstruction/reconstructor.h"
+#include "tabletop_common/config_schema.h"
 
 namespace psfs {
 
@@ -43,12 +44,22 @@ struct NodeletOptions {
 
 struct ReconstructorConfig {
   ReconstructorParams params;
-  std::string skin_model_path;  // resolved against the config file's directory
+  // As written in the file until finishReconstructorConfig() resolves it against the file's
+  // directory.
+  std::string skin_model_path = "skin_gmm.yaml";
   NodeletOptions nodelet;
 };
 
-// Throws std::runtime_error "<path>: <key>: <problem>" for unreadable files, unknown keys, wrong
-// types and values the parameter structs reject.
+// Binds every key of config/psfs.yaml to `c`, with the aliases the nodelet takes as private
+// parameters (~threads for nodelet/threads, ~body_threshold for fusion/body/threshold, ...).
+void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema* s);
+
+// After the file (and any overrides) were read: the range checks of the parameter structs, and
+// the skin model's path resolved. Throws std::runtime_error "<path>: <key>: <problem>".
+void finishReconstructorConfig(const std::string& path, ReconstructorConfig* c);
+
+// Both of the above around the file alone. Throws std::runtime_error "<path>: <key>: <problem>"
+// for unreadable files, unknown keys, wrong types and values the parameter structs reject.
 ReconstructorConfig loadReconstructorConfig(const std::string& path);
 
 }  // namespace psfs

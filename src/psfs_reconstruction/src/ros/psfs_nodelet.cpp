@@ -13,6 +13,8 @@
 // Service ~relearn_background (std_srvs/Trigger): forget the background model and learn it
 // again from the next learning_frames sets (the workspace must be empty then), e.g. after the
 // lighting or the room changed.
+// Live tuning (dynamic_reconfigure, cfg/PsfsTuning.cfg): body_threshold, skin_threshold and
+// hand_threshold, applied from the next frame set on.
 //
 // Frame sets wait in a PipelineGate (tabletop_common/pipeline_gate.h) and are processed on the
 // nodelet's own thread: this is the pipeline's one drop point (live: the oldest waiting set goes
@@ -21,12 +23,15 @@
 //
 // Private parameters:
 //   ~config_file          the YAML with every parameter   [$(find psfs_reconstruction)/config/psfs.yaml]
-//   ~threads              overrides nodelet/threads of the file (if set)
-//   ~background_load_dir  overrides nodelet/background_load_dir (if set)
-//   ~background_save_dir  overrides nodelet/background_save_dir (if set)
-//   ~queue_size, ~wait_for_tracker, ~tracker_timeout, ~load_shedding
-//                         override the nodelet/ keys of the file (if set)
+//   ~<key>                any key of the file, as its path (~fusion/body/threshold), overrides
+//                         it (tabletop_common/ros/config_overrides.h); an unknown one is an error
+//   ~threads, ~queue_size, ~wait_for_tracker, ~tracker_timeout, ~load_shedding,
+//   ~background_load_dir, ~background_save_dir
+//                         short names of the nodelet/ keys of the file
+//   ~body_threshold, ~skin_threshold, ~hand_threshold
+//                         short names of fusion/*/threshold, also live (dynamic_reconfigure)
 //   ~world_frame          frame of the volumes                               [world]
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -55,11 +60,14 @@
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
 
+#include "psfs_reconstruction/PsfsTuningConfig.h"  // generated from cfg/PsfsTuning.cfg
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/reconstructor_config.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
 #include "tabletop_common/pipeline_gate.h"
 #include "tabletop_capture/ros/frame_set_view.h"
+#include "tabletop_common/ros/config_overrides.h"
+#include "tabletop_common/ros/live_tuning.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_common/running_stats.h"
 
@@ -70,6 +78,7 @@ using tabletop_common::RunningStats;
 class PsfsNodelet : public nodelet::Nodelet {
  public:
   ~PsfsNodelet() override {
+    tuning_.reset();  // no tuning callback while the rest goes
     {
       std::lock_guard<std::mutex> lock(gate_mutex_);
       running_ = false;
@@ -90,31 +99,22 @@ class PsfsNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    std::string config_file =
-        ros::package::getPath("psfs_reconstruction") + "/config/psfs.yaml";
-    pnh.param("config_file", config_file, config_file);
     pnh.param("world_frame", world_frame_, std::string("world"));
     diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "psfs", "psfs reconstruction",
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
+    std::string config_file;
     try {
-      cfg_ = loadReconstructorConfig(config_file);
-      if (pnh.hasParam("threads")) pnh.getParam("threads", cfg_.params.threads);
-      if (pnh.hasParam("queue_size")) pnh.getParam("queue_size", cfg_.nodelet.queue_size);
-      if (cfg_.nodelet.queue_size < 1) throw std::runtime_error("~queue_size must be >= 1");
-      if (pnh.hasParam("wait_for_tracker"))
-        pnh.getParam("wait_for_tracker", cfg_.nodelet.wait_for_tracker);
-      if (pnh.hasParam("tracker_timeout"))
-        pnh.getParam("tracker_timeout", cfg_.nodelet.tracker_timeout);
-      if (pnh.hasParam("load_shedding")) pnh.getParam("load_shedding", cfg_.nodelet.load_shedding);
+      tabletop_common::ConfigSchema schema;
+      addReconstructorKeys(&cfg_, &schema);
+      config_file = tabletop_common::loadConfigWithOverrides(
+          pnh, ros::package::getPath("psfs_reconstruction") + "/config/psfs.yaml", schema,
+          {"world_frame"});
+      finishReconstructorConfig(config_file, &cfg_);
       tabletop_common::PipelineGateConfig gate;
       gate.capacity = static_cast<size_t>(cfg_.nodelet.queue_size);
       gate.ack_timeout = cfg_.nodelet.tracker_timeout;
       gate_.setConfig(gate);
-      if (pnh.hasParam("background_load_dir"))
-        pnh.getParam("background_load_dir", cfg_.nodelet.background_load_dir);
-      if (pnh.hasParam("background_save_dir"))
-        pnh.getParam("background_save_dir", cfg_.nodelet.background_save_dir);
       const GaussianMixture2D skin = GaussianMixture2D::load(cfg_.skin_model_path);
       recon_ = std::make_unique<Reconstructor>(skin, cfg_.params);
     } catch (const std::exception& e) {
@@ -129,6 +129,12 @@ class PsfsNodelet : public nodelet::Nodelet {
     skin_cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("psfs/skin_cloud", 1);
     processed_pub_ = nh.advertise<std_msgs::Header>("psfs/processed", 50);
     relearn_srv_ = pnh.advertiseService("relearn_background", &PsfsNodelet::onRelearn, this);
+    psfs_reconstruction::PsfsTuningConfig live;
+    live.body_threshold = cfg_.params.body.threshold;
+    live.skin_threshold = cfg_.params.skin.threshold;
+    live.hand_threshold = cfg_.params.hand.threshold;
+    tuning_ = std::make_unique<tabletop_common::LiveTuning<psfs_reconstruction::PsfsTuningConfig>>(
+        pnh, live, [this](const psfs_reconstruction::PsfsTuningConfig& c) { onTuning(c); }, "psfs");
     roi_sub_ = nh.subscribe(cfg_.nodelet.hand_roi_topic, 5, &PsfsNodelet::onTargets, this);
     running_ = true;
     worker_ = std::thread(&PsfsNodelet::work, this);
@@ -257,9 +263,45 @@ class PsfsNodelet : public nodelet::Nodelet {
       // Popped under the same lock as the flag was read: a set of the last pass is never taken
       // for the first of the replay.
       if (start_over != StartOver::kNone) startOver(start_over == StartOver::kRelearn);
+      applyTuning();
       process(*next, shed_every);
       lock.lock();
     }
+  }
+
+  // dynamic_reconfigure thread: checked here (a refused value never reaches the worker), applied
+  // by the worker before its next set, so that a set is fused with one set of thresholds.
+  void onTuning(const psfs_reconstruction::PsfsTuningConfig& c) {
+    PsfsOptions o = cfg_.params.body;
+    for (const double t : {c.body_threshold, c.skin_threshold, c.hand_threshold}) {
+      o.threshold = t;
+      PsfsFusion check(o);  // throws std::invalid_argument for a value out of range
+    }
+    std::lock_guard<std::mutex> lock(tuning_mutex_);
+    pending_thresholds_ = {c.body_threshold, c.skin_threshold, c.hand_threshold};
+  }
+
+  // Worker thread.
+  void applyTuning() {
+    std::optional<std::array<double, 3>> t;
+    {
+      std::lock_guard<std::mutex> lock(tuning_mutex_);
+      t = std::exchange(pending_thresholds_, std::nullopt);
+    }
+    if (!t) return;
+    const ReconstructorParams& now = recon_->params();
+    if (now.body.threshold == (*t)[0] && now.skin.threshold == (*t)[1] && now.hand.threshold == (*t)[2]) return;
+    try {
+      recon_->setFusionThresholds((*t)[0], (*t)[1], (*t)[2]);
+    } catch (const std::invalid_argument& e) {
+      NODELET_WARN("psfs: live tuning not applied: %s", e.what());
+      return;
+    }
+    cfg_.params.body.threshold = (*t)[0];
+    cfg_.params.skin.threshold = (*t)[1];
+    cfg_.params.hand.threshold = (*t)[2];
+    NODELET_INFO("psfs: live tuning: thresholds body %.3f, skin %.3f, hand %.3f from the next set",
+                 (*t)[0], (*t)[1], (*t)[2]);
   }
 
   bool onRelearn(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
@@ -604,6 +646,9 @@ class PsfsNodelet : public nodelet::Nodelet {
   ros::Time last_in_;                   // stamp of the last set taken in (time-jump detection)
   StartOver start_over_ = StartOver::kNone;  // see requestStartOver()
   ros::ServiceServer relearn_srv_;
+  std::mutex tuning_mutex_;
+  std::optional<std::array<double, 3>> pending_thresholds_;  // from onTuning(), for the worker
+  std::unique_ptr<tabletop_common::LiveTuning<psfs_reconstruction::PsfsTuningConfig>> tuning_;
   uint64_t time_jumps_ = 0;
   std::atomic<uint64_t> hands_shed_{0};  // hand volume sets given up by load shedding
   ros::Publisher processed_pub_;

@@ -189,6 +189,16 @@ class FrameSetAssembler {
     return out;
   }
 
+  // Live tuning: tolerance and timeout for the images that arrive from now on (pending sets
+  // keep their anchors). Throws std::invalid_argument (nothing changed) as the constructor does.
+  void setTiming(double tolerance, double timeout) {
+    FrameSetAssemblerConfig c = config_;
+    c.tolerance = tolerance;
+    c.timeout = timeout;
+    FrameSetAssembler<T> check(c);
+    config_ = c;
+  }
+
   // Forgets pending and completed sets and the watermark (not the counters). For time jumps.
   void reset() {
     pending_.clear();

@@ -1,7 +1,11 @@
 // Frame synchroniser nodelet: bundles the N camera streams (cam<i>/image_raw + camera_info)
 // into synchronised MultiViewFrame sets on `frames`, converting every image to rgb8.
 // Grouping, ordering and drop policy live in FrameSetAssembler (ROS-free, unit-tested);
-// image validation and debayering in convertToRgb8. Parameters: config/frame_synchronizer.yaml.
+// image validation and debayering in convertToRgb8.
+// Parameters: ~config_file (default $(find tabletop_capture)/config/frame_synchronizer.yaml,
+// every key documented there) read strictly, then any private parameter named like a key
+// overrides it; an unknown one stops the stage (tabletop_common/ros/config_overrides.h).
+// Live tuning (dynamic_reconfigure, cfg/FrameSynchronizerTuning.cfg): tolerance, timeout.
 #include <deque>
 #include <memory>
 #include <mutex>
@@ -12,6 +16,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <ros/package.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -20,9 +25,13 @@
 
 #include <tabletop_msgs/MultiViewFrame.h>
 
+#include "tabletop_capture/FrameSynchronizerTuningConfig.h"  // generated from cfg/FrameSynchronizerTuning.cfg
 #include "tabletop_capture/frame_set_assembler.h"
+#include "tabletop_capture/frame_synchronizer_config.h"
 #include "tabletop_capture/image_conversion.h"
 #include "tabletop_capture/ros/conversions.h"
+#include "tabletop_common/ros/config_overrides.h"
+#include "tabletop_common/ros/live_tuning.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_capture/ros/published_frames.h"
 #include "tabletop_common/running_stats.h"
@@ -49,29 +58,34 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    int num_cameras = 8, max_pending = 10, queue_size = 4, image_queue_size = 10;
-    std::string prefix = "cam";
-    FrameSetAssemblerConfig cfg;
-    pnh.param("num_cameras", num_cameras, num_cameras);
-    pnh.param("camera_prefix", prefix, prefix);
-    pnh.param("tolerance", cfg.tolerance, 0.0);
-    pnh.param("timeout", cfg.timeout, 0.2);
-    pnh.param("max_pending", max_pending, max_pending);
-    pnh.param("world_frame", world_frame_, std::string("world"));
-    pnh.param("tf_timeout", tf_timeout_, 0.05);
-    pnh.param("queue_size", queue_size, queue_size);
-    pnh.param("image_queue_size", image_queue_size, image_queue_size);
-    pnh.param("hold_until_subscribers", hold_until_subscribers_, hold_until_subscribers_);
-    pnh.param("max_held", max_held_, max_held_);
-    pnh.param("time_jump_threshold", time_jump_threshold_, time_jump_threshold_);
-    cfg.num_cameras = num_cameras;
-    cfg.max_pending = static_cast<size_t>(std::max(1, max_pending));
+    diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
+        nh, pnh, getName(), "frame_synchronizer", "frame synchronizer",
+        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
+    FrameSynchronizerConfig cfg;
+    FrameSetAssemblerConfig timing;
     try {
-      assembler_ = std::make_unique<FrameSetAssembler<ImagePtr>>(cfg);
+      tabletop_common::ConfigSchema schema;
+      addFrameSynchronizerKeys(&cfg, &schema);
+      tabletop_common::loadConfigWithOverrides(
+          pnh, ros::package::getPath("tabletop_capture") + "/config/frame_synchronizer.yaml", schema, {});
+      timing = cfg.assembler();
+      assembler_ = std::make_unique<FrameSetAssembler<ImagePtr>>(timing);
     } catch (const std::exception& e) {
-      NODELET_FATAL("frame synchroniser: bad parameters: %s", e.what());
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        fatal_ = e.what();
+      }
+      NODELET_FATAL("frame synchroniser: not started: bad parameters: %s", e.what());
       return;
     }
+    const int num_cameras = cfg.num_cameras;
+    const std::string& prefix = cfg.camera_prefix;
+    world_frame_ = cfg.world_frame;
+    tf_timeout_ = cfg.tf_timeout;
+    hold_until_subscribers_ = cfg.hold_until_subscribers;
+    max_held_ = cfg.max_held;
+    time_jump_threshold_ = cfg.time_jump_threshold;
+    const int queue_size = cfg.queue_size, image_queue_size = cfg.image_queue_size;
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh);
     cameras_.resize(num_cameras);
     for (int i = 0; i < num_cameras; ++i) {
@@ -88,16 +102,23 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
                                                          std::max(1, image_queue_size), on_info);
     }
     pub_ = nh.advertise<tabletop_msgs::MultiViewFrame>("frames", queue_size);
-    diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
-        nh, pnh, getName(), "frame_synchronizer", "frame synchronizer",
-        [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     boost::function<void(const ros::WallTimerEvent&)> on_tick = [this](const ros::WallTimerEvent&) {
       onTick();
     };
     tick_ = nh.createWallTimer(ros::WallDuration(0.05), on_tick);
     NODELET_INFO("frame synchroniser: %d cameras (%s0..%s%d), tolerance %.4f s, timeout %.3f s",
-                 num_cameras, prefix.c_str(), prefix.c_str(), num_cameras - 1, cfg.tolerance,
-                 cfg.timeout);
+                 num_cameras, prefix.c_str(), prefix.c_str(), num_cameras - 1, timing.tolerance,
+                 timing.timeout);
+    tabletop_capture::FrameSynchronizerTuningConfig live;
+    live.tolerance = timing.tolerance;
+    live.timeout = timing.timeout;
+    tuning_ = std::make_unique<tabletop_common::LiveTuning<tabletop_capture::FrameSynchronizerTuningConfig>>(
+        pnh, live,
+        [this](const tabletop_capture::FrameSynchronizerTuningConfig& c) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          assembler_->setTiming(c.tolerance, c.timeout);
+        },
+        "frame synchroniser");
   }
 
   void onInfo(int i, const sensor_msgs::CameraInfoConstPtr& msg) {
@@ -337,7 +358,10 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!assembler_) {
-      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started (bad parameters)");
+      if (fatal_.empty())
+        stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "starting");
+      else
+        stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: bad parameters: " + fatal_);
       return;
     }
     const ros::WallTime now = ros::WallTime::now();
@@ -383,6 +407,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   }
 
   std::unique_ptr<FrameSetAssembler<ImagePtr>> assembler_;
+  std::string fatal_;  // why the nodelet did not start
   std::vector<Camera> cameras_;
   ros::Publisher pub_;
   tf2_ros::Buffer tf_buffer_;
@@ -404,6 +429,8 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   tabletop_common::RunningStats convert_ms_, bundle_ms_;
   uint64_t published_ = 0, published_at_last_diag_ = 0, problems_at_last_diag_ = 0,
            tf_failures_ = 0;
+  // Last: destroyed first, so that no tuning callback meets a half-destroyed nodelet.
+  std::unique_ptr<tabletop_common::LiveTuning<tabletop_capture::FrameSynchronizerTuningConfig>> tuning_;
 };
 
 }  // namespace tabletop_capture

@@ -105,7 +105,21 @@ class DemoMonitor {
       volume_subs_.push_back(
           nh_.subscribe<tabletop_msgs::VoxelVolume>("ground_truth/" + kind + "_volume", 8, on_truth));
     }
-    frames_sub_ = nh_.subscribe("frames", 10, &DemoMonitor::onFrame, this);
+    if (digests_) {
+      // The synchroniser holds the first sets until its `frames` subscribers are there, and we
+      // are one of them: listen on `frames` only once psfs/processed is connected, so that no
+      // digest of the first sets is lost to a connection still being made.
+      const ros::WallTime asked = ros::WallTime::now();
+      boost::function<void(const ros::WallTimerEvent&)> when_connected = [this, asked](const ros::WallTimerEvent&) {
+        const bool connected = processed_sub_.getNumPublishers() > 0 && hands_sub_.getNumPublishers() > 0;
+        if (!connected && (ros::WallTime::now() - asked).toSec() < 10.0) return;  // no pSfS: go on
+        frames_sub_ = nh_.subscribe("frames", 10, &DemoMonitor::onFrame, this);
+        subscribe_timer_.stop();
+      };
+      subscribe_timer_ = nh_.createWallTimer(ros::WallDuration(0.02), when_connected);
+    } else {
+      frames_sub_ = nh_.subscribe("frames", 10, &DemoMonitor::onFrame, this);
+    }
     truth_sub_ = nh_.subscribe("ground_truth/targets", 50, &DemoMonitor::onTruth, this);
     tracked_sub_ = nh_.subscribe("hands/targets", 300, &DemoMonitor::onTracked, this);
     diag_sub_ = nh_.subscribe("/diagnostics", 50, &DemoMonitor::onDiagnostics, this);
@@ -590,6 +604,7 @@ class DemoMonitor {
   }
 
   ros::NodeHandle nh_, pnh_;
+  ros::WallTimer subscribe_timer_;
   ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_, hands_sub_, processed_sub_;
   bool digests_ = false;
   // Keyed by (pass over the bag, stamp): a bag played twice in one run has the same stamps twice.

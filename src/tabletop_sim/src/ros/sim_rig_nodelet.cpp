@@ -29,6 +29,7 @@
 
 #include "tabletop_capture/rig_description.h"
 #include "tabletop_capture/ros/conversions.h"
+#include "tabletop_common/ros/config_overrides.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_sim/ros/sim_truth_msgs.h"
 #include "tabletop_common/running_stats.h"
@@ -50,38 +51,52 @@ class SimRigNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     SimOptions o;
-    pnh.param("num_cameras", o.num_cameras, o.num_cameras);
-    pnh.param("width", o.width, o.width);
-    pnh.param("height", o.height, o.height);
-    pnh.param("distortion", o.distortion, o.distortion);
-    pnh.param("fps", o.fps, o.fps);
-    pnh.param("script", o.script, o.script);
-    pnh.param("empty_frames", o.empty_frames, o.empty_frames);
     int seed = static_cast<int>(o.seed);
-    pnh.param("seed", seed, seed);
-    o.seed = static_cast<uint64_t>(seed);
-    pnh.param("noise_sigma", o.noise_sigma, o.noise_sigma);
-    pnh.param("bayer", o.bayer, o.bayer);
-    pnh.param("short_sleeves", o.short_sleeves, o.short_sleeves);
-    pnh.param("shadows", o.shadows, o.shadows);
-    pnh.param("threads", o.threads, o.threads);
     std::string rig_file;
-    pnh.param("rig_file", rig_file, std::string());
-    pnh.param("max_frames", max_frames_, 0);
-    pnh.param("start_delay", start_delay_, 1.0);
-    pnh.param("realtime", realtime_, true);
-    pnh.param("lockstep", lockstep_, 0);
-    pnh.param("lockstep_timeout", lockstep_timeout_, 5.0);
     std::string lockstep_topic = "psfs/processed";
-    pnh.param("lockstep_topic", lockstep_topic, lockstep_topic);
     // Oracle volumes: every N-th frame (0 = never), on the workspace box at these dims.
-    pnh.param("truth_volume_every", truth_every_, 0);
-    std::vector<int> dims{64, 64, 48};
-    pnh.param("truth_volume_dims", dims, dims);
-    if (dims.size() == 3 && dims[0] > 0 && dims[1] > 0 && dims[2] > 0)
-      truth_dims_ = Eigen::Vector3i(dims[0], dims[1], dims[2]);
-    else
-      NODELET_ERROR("simulated rig: truth_volume_dims must be 3 positive integers; using 64 64 48");
+    Eigen::Vector3i dims(64, 64, 48);
+    max_frames_ = 0;
+    start_delay_ = 1.0;
+    realtime_ = true;
+    lockstep_ = 0;
+    lockstep_timeout_ = 5.0;
+    truth_every_ = 0;
+    // No file: the private parameters alone, through the strict loader every stage uses (an
+    // unknown name is an error, not a silent default).
+    tabletop_common::ConfigSchema schema;
+    schema.add("num_cameras", &o.num_cameras)
+        .add("width", &o.width)
+        .add("height", &o.height)
+        .add("distortion", &o.distortion)
+        .add("fps", &o.fps)
+        .add("script", &o.script)
+        .add("empty_frames", &o.empty_frames)
+        .add("seed", &seed)
+        .add("noise_sigma", &o.noise_sigma)
+        .add("bayer", &o.bayer)
+        .add("short_sleeves", &o.short_sleeves)
+        .add("shadows", &o.shadows)
+        .add("threads", &o.threads)
+        .add("rig_file", &rig_file)
+        .add("max_frames", &max_frames_)
+        .add("start_delay", &start_delay_)
+        .add("realtime", &realtime_)
+        .add("lockstep", &lockstep_)
+        .add("lockstep_timeout", &lockstep_timeout_)
+        .add("lockstep_topic", &lockstep_topic)
+        .add("truth_volume_every", &truth_every_)
+        .add("truth_volume_dims", &dims);
+    try {
+      tabletop_common::applyPrivateOverrides(pnh, schema, {});
+      if (seed < 0) throw std::runtime_error("~seed: must be >= 0");
+      if (!(dims.minCoeff() > 0)) throw std::runtime_error("~truth_volume_dims: must be 3 positive integers");
+    } catch (const std::exception& e) {
+      NODELET_FATAL("simulated rig: not started: bad parameters: %s", e.what());
+      return;
+    }
+    o.seed = static_cast<uint64_t>(seed);
+    truth_dims_ = dims;
 
     try {
       if (rig_file.empty()) {

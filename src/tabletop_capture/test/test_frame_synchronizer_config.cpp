@@ -1,0 +1,82 @@
+// config/frame_synchronizer.yaml through the strict loader: the shipped file holds the
+// defaults, a bad file names itself and the key, and live tuning changes only the timing.
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "tabletop_capture/frame_synchronizer_config.h"
+
+namespace tabletop_capture {
+namespace {
+
+std::string errorOf(const std::string& text) {
+  const std::string path = "/tmp/sync_cfg_" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(path) << text;
+  std::string what;
+  try {
+    loadFrameSynchronizerConfig(path);
+  } catch (const std::runtime_error& e) {
+    what = e.what();
+    EXPECT_NE(what.find(path + ": "), std::string::npos) << what;
+  }
+  std::remove(path.c_str());
+  return what;
+}
+
+TEST(FrameSynchronizerConfig, ShippedFileHoldsTheDefaults) {
+  const std::string path = std::string(TABLETOP_CAPTURE_CONFIG_DIR) + "/frame_synchronizer.yaml";
+  const FrameSynchronizerConfig c = loadFrameSynchronizerConfig(path), d;
+  tabletop_common::ConfigSchema schema;
+  FrameSynchronizerConfig scratch;
+  addFrameSynchronizerKeys(&scratch, &schema);
+  const YAML::Node file = YAML::LoadFile(path);
+  for (const std::string& k : schema.keys()) EXPECT_TRUE(file[k]) << k << " is not in the file";
+  EXPECT_EQ(c.num_cameras, d.num_cameras);
+  EXPECT_EQ(c.camera_prefix, d.camera_prefix);
+  EXPECT_EQ(c.tolerance, d.tolerance);
+  EXPECT_EQ(c.timeout, d.timeout);
+  EXPECT_EQ(c.max_pending, d.max_pending);
+  EXPECT_EQ(c.time_jump_threshold, d.time_jump_threshold);
+  EXPECT_EQ(c.world_frame, d.world_frame);
+  EXPECT_EQ(c.tf_timeout, d.tf_timeout);
+  EXPECT_EQ(c.queue_size, d.queue_size);
+  EXPECT_EQ(c.image_queue_size, d.image_queue_size);
+  EXPECT_EQ(c.hold_until_subscribers, d.hold_until_subscribers);
+  EXPECT_EQ(c.max_held, d.max_held);
+}
+
+TEST(FrameSynchronizerConfig, BadFilesNameTheFileAndTheKey) {
+  EXPECT_NE(errorOf("tolerence: 0.01\n").find("tolerence: unknown key"), std::string::npos);
+  EXPECT_NE(errorOf("tolerance: -0.01\n").find("tolerance: must be"), std::string::npos);
+  EXPECT_NE(errorOf("num_cameras: eight\n").find("num_cameras: wrong type"), std::string::npos);
+  EXPECT_NE(errorOf("max_pending: 0\n").find("max_pending: must be >= 1"), std::string::npos);
+  EXPECT_NE(errorOf("camera_prefix: \"\"\n").find("camera_prefix"), std::string::npos);
+}
+
+// With a 15 ms tolerance, images 10 ms apart make one set; tuned to 0 (hardware sync) the next
+// ones must have equal stamps. A refused value leaves the timing as it was.
+TEST(FrameSynchronizerConfig, TimingIsTunedLive) {
+  FrameSetAssemblerConfig a;
+  a.num_cameras = 2;
+  a.tolerance = 0.015;
+  a.timeout = 1.0;
+  FrameSetAssembler<int> asm2(a);
+  asm2.add(0, 10.00, 1);
+  asm2.add(1, 10.01, 2);
+  EXPECT_EQ(asm2.takeCompleted().size(), 1u);
+  asm2.setTiming(0.0, 1.0);
+  EXPECT_THROW(asm2.setTiming(-1.0, 1.0), std::invalid_argument);
+  EXPECT_EQ(asm2.config().tolerance, 0.0);
+  asm2.add(0, 10.04, 3);
+  asm2.add(1, 10.04, 4);
+  EXPECT_EQ(asm2.takeCompleted().size(), 1u);
+  asm2.add(0, 10.08, 5);
+  asm2.add(1, 10.09, 6);  // within the old tolerance, not within the new one
+  EXPECT_TRUE(asm2.takeCompleted().empty());
+}
+
+}  // namespace
+}  // namespace tabletop_capture
