@@ -140,7 +140,25 @@ class MpfTracker {
   // leaves its particles alone.
   void endTrack(int slot, int merged_into, const Eigen::Vector3d& merge_offset);
   void mixWeights();
+  // Reconfiguration (step 4 above; mpf_reconfiguration.cpp): reconfigure() runs the steps
+  // from seedHeadMean() to updateReportedEstimates() in this order, passing their working
+  // state (the k-means seeds and what became of them) in a Reclustering; handPlaceOk() and
+  // bestParticle() are the seeding rules' tests.
+  struct Reclustering;
   void reconfigure();
+  bool handPlaceOk(const Reclustering& r, const Eigen::Vector3d& x, double hand_distance) const;
+  bool bestParticle(const Reclustering& r, int slot, double min_obs, double hand_distance,
+                    Eigen::Vector3d* at) const;
+  void seedHeadMean(Reclustering* r) const;
+  void seedHandMeans(Reclustering* r) const;
+  void seedSplitMeans(Reclustering* r) const;
+  void clusterParticles(Reclustering* r);
+  void assignClusterSlots(Reclustering* r) const;
+  void reweightClusteredParticles(Reclustering* r);
+  void endMergedAndLostTracks(const Reclustering& r);
+  void startSplitTracks(const Reclustering& r);
+  void renormaliseMixture(const Reclustering& r);
+  void updateReportedEstimates();
   Eigen::Vector3d refineCentroid(int slot) const;
   void publish();
   Eigen::Vector3f clampToWorkspace(const Eigen::Vector3f& x) const;

@@ -1,0 +1,190 @@
+// The kernel paths give the same bytes: scalar, AVX2 and AVX-512 fusion kernels and thread
+// splits, the shared multi-projection face samples against a brute force, and the AVX-512 and
+// AVX2 row projections. Part of test_psfs_fusion.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include "../src/fusion_common.h"  // private: the face walk, checked against a brute force below
+#include "../src/psfs_kernels.h"
+#include "fusion_test_utils.h"
+#include "psfs_reconstruction/psfs_fusion.h"
+#include "psfs_reconstruction/simd_dispatch.h"
+#include "tabletop_capture/default_rig.h"
+
+namespace psfs {
+namespace {
+
+using test::Sphere;
+
+TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
+  if (!avx2Available()) {
+    GTEST_SKIP() << "no AVX2 on this CPU: only the scalar kernels exist";
+  }
+  const auto rig = tabletop_capture::makeDefaultRig();
+  const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2},
+                                       {Eigen::Vector3d(0.2, 0.1, 0.5), 0.08}};
+  std::vector<ViewImage> views;
+  for (size_t c = 0; c < rig.cameras.size(); ++c) {
+    ViewImage v;
+    v.likelihood = test::noisy(test::sphereLikelihood(rig.cameras[c], spheres), 40, 0.05, 7 + c);
+    if (c == 2) {
+      v.active = cv::Mat(240, 320, CV_8UC1, cv::Scalar(1));
+      v.active(cv::Rect(100, 50, 80, 120)).setTo(0);
+    }
+    views.push_back(v);
+  }
+  // Camera 1 zoomed in: it sees only part of the grid, so rows, columns and layers switch
+  // between observed and unobserved voxels (the face kernels' fallbacks).
+  auto cams = rig.cameras;
+  cams[1].fx *= 2.5;
+  cams[1].fy *= 2.5;
+  // The reference grid, and one 37 voxels wide: rows padded to 40, so the AVX-512 kernel's
+  // last step per row has a single chunk of 8 (5 voxels and 3 of padding).
+  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm),
+                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
+  for (const VoxelGrid& grid : grids)
+  for (bool multi : {false, true})
+    for (int k : {0, 1, 2, 4}) {
+      PsfsOptions o;
+      o.multi_projection = multi;
+      o.occluded_views = k;
+      ProjectionTableOptions to;
+      to.multi_projection = multi;
+      ProjectionTable table(grid, cams, to);
+      ViewEvidence ev;
+      ev.set(views, multi);
+      ProbabilityVolume vec, sca, vec2;
+      PsfsFusion(o).fuse(table, ev, &vec);  // AVX-512 where the CPU has it, else AVX2
+      forceAvx2Kernels(true);
+      PsfsFusion(o).fuse(table, ev, &vec2);
+      forceAvx2Kernels(false);
+      forceScalarKernels(true);
+      PsfsFusion(o).fuse(table, ev, &sca);
+      forceScalarKernels(false);
+      ASSERT_EQ(vec.data, sca.data) << grid.describe() << " multi " << multi << " k " << k
+                                    << (avx512KernelsActive() ? " (AVX-512)" : " (AVX2)");
+      ASSERT_EQ(vec2.data, sca.data) << grid.describe() << " multi " << multi << " k " << k << " (AVX2)";
+      // Each thread walks its own range of layers: the split must not show in the bytes.
+      for (int threads : {1, 3, 5}) {
+        o.threads = threads;
+        ProbabilityVolume t;
+        PsfsFusion(o).fuse(table, ev, &t);
+        ASSERT_EQ(t.data, vec.data) << grid.describe() << " multi " << multi << " k " << k << ", "
+                                    << threads << " threads";
+      }
+    }
+}
+
+// The shared face samples follow the rule of psfs_kernels.h whatever the walk: a brute force
+// per voxel (each face from the table and the likelihood bytes directly) against the walk the
+// reference variants use, on a rig where one camera sees only part of the grid.
+TEST(PsfsFusion, FaceSamplesFollowTheSharingRule) {
+  const auto rig = tabletop_capture::makeDefaultRig();
+  auto cams = rig.cameras;
+  cams[1].fx *= 2.5;
+  cams[1].fy *= 2.5;
+  const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2}};
+  std::vector<ViewImage> views;
+  std::vector<cv::Mat> images;
+  for (size_t c = 0; c < cams.size(); ++c) {
+    images.push_back(test::noisy(test::sphereLikelihood(cams[c], spheres), 40, 0.05, 31 + c));
+    views.push_back(ViewImage{images.back(), 0, cv::Mat()});
+  }
+  // A switched-off patch: it takes evidence away, but which samples a face uses must not change.
+  views[2].active = cv::Mat(240, 320, CV_8UC1, cv::Scalar(1));
+  views[2].active(cv::Rect(100, 50, 80, 120)).setTo(0);
+  const VoxelGrid grid = cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 20);  // 20^3, 30 mm
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(grid, cams, to);
+  ViewEvidence ev;
+  ev.set(views, true);
+  const std::vector<detail::KernelView> kv = detail::kernelViews(ev);
+  const int C = table.numCameras(), nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  const int nxp = table.paddedRowLength(), chunks = table.chunksPerRow();
+
+  // Bilinear sample of camera c at packed centre uv + sign * packed offset, straight from the
+  // bytes with clamped coordinates (1/16 px weights).
+  auto sample = [&](int c, uint32_t uv, uint32_t off, int sign) {
+    const int U = int(uv & 0xFFFF) + sign * int(int16_t(off & 0xFFFF)) - 8;  // 16 * (u - pixel 0)
+    const int V = int(uv >> 16) + sign * (int32_t(off) >> 16) - 8;
+    const int u0 = U >> 4, v0 = V >> 4, fu = U & 15, fv = V & 15;  // floor for negatives too
+    auto at = [&](int u, int v) {
+      return int(images[c].at<uint8_t>(std::clamp(v, 0, images[c].rows - 1), std::clamp(u, 0, images[c].cols - 1)));
+    };
+    return (at(u0, v0) * (16 - fv) + at(u0, v0 + 1) * fv) * (16 - fu) +
+           (at(u0 + 1, v0) * (16 - fv) + at(u0 + 1, v0 + 1) * fv) * fu;
+  };
+  std::vector<uint32_t> scratch(table.offsetScratchSize());
+  auto offset = [&](int c, int x, int y, int z, int axis) {
+    return table.rowOffsets(size_t(y) + size_t(ny) * z, scratch.data())[(c * chunks + x / ProjectionTable::kChunk) * 3 + axis];
+  };
+  size_t checked = 0, unobserved = 0, fallbacks = 0;
+  std::vector<int32_t> walk(grid.numVoxels() * C);
+  for (int threads : {1, 2, 3}) {
+    detail::forEachFaceRow(table, kv, threads, [&](size_t r, const uint32_t* centres, const uint32_t* offsets,
+                                                   uint16_t* yface, uint16_t* zface) {
+      std::vector<int32_t> pairs(size_t(C) * nxp);
+      detail::medianPairsOfRow(kv.data(), C, nxp, centres, offsets, yface, zface, pairs.data());
+      for (int c = 0; c < C; ++c)
+        for (int x = 0; x < nx; ++x) walk[(r * nx + x) * C + c] = pairs[size_t(c) * nxp + x];
+    });
+    for (int z = 0; z < nz; ++z)
+      for (int y = 0; y < ny; ++y)
+        for (int x = 0; x < nx; ++x)
+          for (int c = 0; c < C; ++c) {
+            const uint32_t no = PackedUV::notObserved(cams[c].height);
+            const uint32_t p = table.centre(c, x, y, z);
+            if (p == no) {
+              ++unobserved;
+              continue;
+            }
+            const int lower[3][3] = {{x - 1, y, z}, {x, y - 1, z}, {x, y, z - 1}};
+            int32_t f[6];
+            for (int a = 0; a < 3; ++a) {
+              f[2 * a + 1] = sample(c, p, offset(c, x, y, z, a), 1);
+              const int* l = lower[a];
+              const bool has = l[0] >= 0 && l[1] >= 0 && l[2] >= 0;
+              const uint32_t q = has ? table.centre(c, l[0], l[1], l[2]) : no;
+              fallbacks += has && q == no;
+              f[2 * a] = q != no ? sample(c, q, offset(c, l[0], l[1], l[2], a), 1)
+                                 : sample(c, p, offset(c, x, y, z, a), -1);
+            }
+            std::sort(f, f + 6);
+            ASSERT_EQ(walk[(grid.index(x, y, z)) * C + c], f[2] + f[3])
+                << "voxel (" << x << ", " << y << ", " << z << ") camera " << c << ", " << threads << " threads";
+            ++checked;
+          }
+  }
+  std::printf("face samples: %zu voxel-camera medians match the brute force (%zu unobserved, %zu "
+              "faces sampled from the upper voxel because the lower one is unobserved)\n",
+              checked, unobserved, fallbacks);
+  EXPECT_GT(unobserved, 0u);
+  EXPECT_GT(fallbacks, 0u);
+}
+
+// The AVX-512 and AVX2 row projections do the same float operations per lane: their tables
+// must be identical to the bit (volumes then agree across CPUs with either extension).
+TEST(ProjectionTable, Avx512AndAvx2ProjectionsAreIdentical) {
+  if (!avx512Available()) GTEST_SKIP() << "no AVX-512 on this CPU: only the AVX2 projection runs";
+  const auto rig = tabletop_capture::makeDefaultRig();
+  ProjectionTableOptions o;
+  o.multi_projection = true;
+  o.storage = TableStorage::kPrecomputed;
+  const ProjectionTable wide(referenceGrid(Resolution::k16mm), rig.cameras, o);
+  forceAvx2Kernels(true);
+  const ProjectionTable narrow(referenceGrid(Resolution::k16mm), rig.cameras, o);
+  forceAvx2Kernels(false);
+  for (size_t r = 0; r < wide.grid().numRows(); ++r) {
+    const uint32_t* a = wide.rowCentres(r, nullptr);
+    const uint32_t* b = narrow.rowCentres(r, nullptr);
+    ASSERT_EQ(0, std::memcmp(a, b, wide.centreScratchSize() * sizeof(uint32_t))) << "row " << r;
+  }
+}
+
+}  // namespace
+}  // namespace psfs
