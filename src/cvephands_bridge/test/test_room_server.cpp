@@ -24,8 +24,8 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 
-#include "cvephands_bridge/room_client.h"
-#include "cvephands_bridge/room_server.h"
+#include "cvephands_bridge/room/room_client.h"
+#include "cvephands_bridge/room/room_server.h"
 
 namespace cvephands {
 namespace {

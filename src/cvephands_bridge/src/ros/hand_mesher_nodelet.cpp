@@ -26,8 +26,8 @@
 #include <tabletop_msgs/HandMeshes.h>
 #include <tabletop_msgs/HandVolumes.h>
 
-#include "cvephands_bridge/marching_cubes.h"
-#include "cvephands_bridge/mesh_components.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/mesh/mesh_components.h"
 #include "cvephands_bridge/ros/mesh_conversions.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_common/running_stats.h"

@@ -1,4 +1,4 @@
-#include "cvephands_bridge/room_server.h"
+#include "cvephands_bridge/room/room_server.h"
 
 #include <algorithm>
 #include <atomic>
@@ -17,7 +17,7 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 
-#include "cvephands_bridge/static_files.h"
+#include "cvephands_bridge/room/static_files.h"
 
 namespace cvephands {
 namespace {

@@ -31,7 +31,7 @@
 
 #include <Eigen/Core>
 
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands {
 

@@ -7,7 +7,7 @@
 // Samples sit at the voxel centres; a cell joins 2x2x2 neighbouring samples. The mesh is
 // indexed (exactly one vertex per crossed grid edge), watertight on closed surfaces (every edge
 // in exactly two triangles: the case table is crack-free by construction, see
-// src/marching_cubes_cases.h), wound counter-clockwise seen from outside (low probability),
+// src/mesh/marching_cubes_cases.h), wound counter-clockwise seen from outside (low probability),
 // with per-vertex normals from the probability gradient (central differences at the samples,
 // interpolated along the edge like the position) pointing outward.
 //
@@ -29,8 +29,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "cvephands_bridge/probability_grid.h"
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/probability_grid.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands {
 

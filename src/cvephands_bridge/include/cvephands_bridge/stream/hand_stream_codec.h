@@ -89,7 +89,7 @@
 
 #include <Eigen/Core>
 
-#include "cvephands_bridge/probability_grid.h"
+#include "cvephands_bridge/mesh/probability_grid.h"
 
 namespace cvephands {
 
