@@ -28,9 +28,9 @@
 #include <vector>
 
 #include "../test/mesh_difference.h"
-#include "cvephands_bridge/hand_stream_codec.h"
-#include "cvephands_bridge/marching_cubes.h"
-#include "cvephands_bridge/sim_hand_volumes.h"
+#include "cvephands_bridge/eval/sim_hand_volumes.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
 
 namespace {
 

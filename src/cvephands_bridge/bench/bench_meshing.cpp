@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "../test/synthetic_volumes.h"
-#include "cvephands_bridge/marching_cubes.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
 
 namespace {
 

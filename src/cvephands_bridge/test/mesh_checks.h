@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands_test {
 

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <limits>
 
-#include "cvephands_bridge/mesh_accuracy.h"
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/mesh_accuracy.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands_test {
 

@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "cvephands_bridge/hand_stream_codec.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "synthetic_volumes.h"
 
 namespace cvephands_test {

@@ -15,7 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "cvephands_bridge/probability_grid.h"
+#include "cvephands_bridge/mesh/probability_grid.h"
 
 namespace cvephands_test {
 

@@ -15,10 +15,10 @@
 #include <tabletop_msgs/HandVolumes.h>
 
 #include "ball_volume.h"
-#include "cvephands_bridge/hand_stream_codec.h"
-#include "cvephands_bridge/marching_cubes.h"
-#include "cvephands_bridge/room_client.h"
-#include "cvephands_bridge/room_server.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/room/room_client.h"
+#include "cvephands_bridge/room/room_server.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "tabletop_common/ros/test_support.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "cvephands_bridge/face_video.h"
+#include "cvephands_bridge/video/face_video.h"
 #include "tabletop_sim/simulated_rig.h"
 
 namespace cvephands {

@@ -6,7 +6,7 @@
 
 #include <cstdio>
 
-#include "cvephands_bridge/hand_mesh_evaluation.h"
+#include "cvephands_bridge/eval/hand_mesh_evaluation.h"
 
 TEST(HandMeshesSim, ProbabilisticMeshBeatsBinaryAndBothHandsAreMeshed) {
   cvephands::HandMeshEvalOptions o;

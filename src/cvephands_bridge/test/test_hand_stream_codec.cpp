@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "cvephands_bridge/hand_stream_codec.h"
-#include "cvephands_bridge/marching_cubes.h"
-#include "cvephands_bridge/sim_hand_volumes.h"
+#include "cvephands_bridge/eval/sim_hand_volumes.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "hand_stream_messages.h"
 #include "mesh_difference.h"
 #include "synthetic_hand_motion.h"

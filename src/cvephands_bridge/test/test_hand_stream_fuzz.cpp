@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "cvephands_bridge/hand_stream_codec.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "hand_stream_messages.h"
 #include "synthetic_hand_motion.h"
 

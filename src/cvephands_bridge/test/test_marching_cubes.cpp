@@ -13,7 +13,7 @@
 #include <string>
 #include <tuple>
 
-#include "cvephands_bridge/marching_cubes.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
 #include "mesh_checks.h"
 #include "synthetic_volumes.h"
 

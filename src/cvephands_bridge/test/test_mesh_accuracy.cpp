@@ -15,7 +15,7 @@
 
 #include <Eigen/Geometry>
 
-#include "cvephands_bridge/mesh_accuracy.h"
+#include "cvephands_bridge/mesh/mesh_accuracy.h"
 
 namespace {
 

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <vector>
 
-#include "cvephands_bridge/marching_cubes.h"
-#include "cvephands_bridge/mesh_components.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/mesh/mesh_components.h"
 
 namespace cvephands {
 namespace {

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "cvephands_bridge/room_protocol.h"
-#include "cvephands_bridge/static_files.h"
+#include "cvephands_bridge/room/room_protocol.h"
+#include "cvephands_bridge/room/static_files.h"
 
 namespace cvephands {
 namespace {

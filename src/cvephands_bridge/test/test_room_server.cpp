@@ -24,8 +24,8 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 
-#include "cvephands_bridge/room_client.h"
-#include "cvephands_bridge/room_server.h"
+#include "cvephands_bridge/room/room_client.h"
+#include "cvephands_bridge/room/room_server.h"
 
 namespace cvephands {
 namespace {
@@ -268,7 +268,7 @@ uint64_t kicked(const RoomServer& server, const std::string& reason) {
 }
 
 // Sends `count` payloads of `size` bytes at 1 kHz: 20 times the live rate of a rig (2 hands at
-// 25 fps), and still no back-to-back burst (see kBurstFactor in room_server.cpp).
+// 25 fps), and still no back-to-back burst (see kBurstFactor in room_server_websocket.cpp).
 void sendSome(RoomClient& from, size_t count, size_t size = 64) {
   const auto t0 = Clock::now();
   for (uint32_t i = 0; i < count; ++i) {

@@ -27,9 +27,9 @@
 #include <tabletop_msgs/MultiViewFrame.h>
 #include <tabletop_msgs/TrackedTargets.h>
 
-#include "cvephands_bridge/face_video.h"
-#include "cvephands_bridge/hand_stream_codec.h"
-#include "cvephands_bridge/room_client.h"
+#include "cvephands_bridge/room/room_client.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
+#include "cvephands_bridge/video/face_video.h"
 #include "tabletop_capture/ros/frame_set_view.h"
 #include "tabletop_common/ros/config_overrides.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"

@@ -31,9 +31,9 @@
 #include <tabletop_msgs/HandVolumes.h>
 
 #include "cvephands_bridge/HandMesherTuningConfig.h"  // generated from cfg/HandMesherTuning.cfg
-#include "cvephands_bridge/marching_cubes.h"
 #include "cvephands_bridge/mesh/hand_mesher_config.h"
-#include "cvephands_bridge/mesh_components.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/mesh/mesh_components.h"
 #include "cvephands_bridge/ros/mesh_conversions.h"
 #include "tabletop_common/ros/config_overrides.h"
 #include "tabletop_common/ros/live_tuning.h"

@@ -13,8 +13,8 @@
 #include <opencv2/imgproc.hpp>
 #include <ros/package.h>
 
-#include "cvephands_bridge/hand_mesh_evaluation.h"
-#include "cvephands_bridge/mesh_render.h"
+#include "cvephands_bridge/eval/hand_mesh_evaluation.h"
+#include "cvephands_bridge/mesh/mesh_render.h"
 #include "tabletop_common/cli_args.h"
 
 namespace {

@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "cvephands_bridge/room_server.h"
+#include "cvephands_bridge/room/room_server.h"
 #include "tabletop_common/cli_args.h"
 
 namespace {

@@ -24,10 +24,10 @@
 #include <thread>
 #include <vector>
 
-#include "cvephands_bridge/face_video.h"
-#include "cvephands_bridge/hand_stream_codec.h"
-#include "cvephands_bridge/marching_cubes.h"
-#include "cvephands_bridge/room_client.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/room/room_client.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
+#include "cvephands_bridge/video/face_video.h"
 #include "tabletop_common/cli_args.h"
 
 namespace {

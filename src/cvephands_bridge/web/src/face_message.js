@@ -1,6 +1,6 @@
-// Face video messages ("CVVF", include/cvephands_bridge/face_video.h): a participant's face as
-// a small JPEG (thesis 7.5), relayed like the hands. Validates the layout and the checksum;
-// the JPEG itself is left to the browser's decoder.
+// Face video messages ("CVVF", include/cvephands_bridge/video/face_video.h): a participant's
+// face as a small JPEG (thesis 7.5), relayed like the hands. Validates the layout and the
+// checksum; the JPEG itself is left to the browser's decoder.
 import { crc32 } from './hand_decoder.js';
 
 const HEADER = 24;

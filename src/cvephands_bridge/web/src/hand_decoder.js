@@ -1,6 +1,7 @@
-// Decoder of the hand stream codec: a port of HandStreamDecoder (src/hand_stream_decoder.cpp;
-// wire format in include/cvephands_bridge/hand_stream_codec.h). It gives byte-identical volumes
-// and rejects what the C++ decoder rejects, with the same reasons, up to two kinds of zstd frame
+// Decoder of the hand stream codec: a port of HandStreamDecoder
+// (src/stream/hand_stream_decoder.cpp; wire format in
+// include/cvephands_bridge/stream/hand_stream_codec.h). It gives byte-identical volumes and
+// rejects what the C++ decoder rejects, with the same reasons, up to two kinds of zstd frame
 // that libzstd never writes (the CRC-32 over the message comes first, so only a broken encoder
 // can send them): fzstd does not check everything libzstd does inside compressed blocks (e.g.
 // match offsets before the start of the output), so a corrupt block may decode here to other
@@ -22,7 +23,7 @@ const METHOD_RAW = 0;
 const METHOD_BAND = 1;
 const MAX_REFERENCES = 16;
 
-// ---- CRC-32 (zlib / PNG polynomial) and varints, as in src/hand_stream_format.h ----------------
+// ---- CRC-32 (zlib / PNG polynomial) and varints, as in src/stream/hand_stream_format.h --------
 
 const CRC_TABLE = (() => {
   const t = new Uint32Array(256);

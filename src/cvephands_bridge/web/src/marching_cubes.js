@@ -1,7 +1,7 @@
 // Marching cubes on a hand probability volume: a port of MarchingCubes::extract
-// (src/marching_cubes.cpp) in its probabilistic, close_at_border mode. Same mesh as C++: one
+// (src/mesh/marching_cubes.cpp) in its probabilistic, close_at_border mode. Same mesh as C++: one
 // vertex per crossed grid edge, numbered in the same order, the same triangles from the same
-// case table (generated here by the rules of src/marching_cubes_cases.cpp), positions and
+// case table (generated here by the rules of src/mesh/marching_cubes_cases.cpp), positions and
 // normals computed with C++'s float / double steps, so they come out bit-identical (as long as the
 // C++ build does not contract them into FMAs: x86-64 without -march).
 //

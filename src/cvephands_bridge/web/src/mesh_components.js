@@ -1,5 +1,5 @@
 // Drops the small connected components of a mesh (specks: a voxel or two of skin-coloured noise
-// that enough views agree on), as the HandMesher does for rviz (src/mesh_components.cpp, same
+// that enough views agree on), as the HandMesher does for rviz (src/mesh/mesh_components.cpp, same
 // rule: components with fewer than minTriangles triangles go; kept vertices and triangles keep
 // their order).
 export function removeSmallComponents(mesh, minTriangles = 64) {

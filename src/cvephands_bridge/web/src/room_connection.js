@@ -1,4 +1,4 @@
-// The browser side of the room protocol (include/cvephands_bridge/room_protocol.h): joins a
+// The browser side of the room protocol (include/cvephands_bridge/room/room_protocol.h): joins a
 // room as a viewer (no seat, never sends hands), follows the membership, measures the clock
 // offset to the server with pings and hands every relayed binary frame to a callback.
 // Reconnects on its own unless the server refused us for good (bad token, bad join).

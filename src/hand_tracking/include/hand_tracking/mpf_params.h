@@ -120,8 +120,8 @@ struct MpfParams {
   double head_centroid_threshold = 0.0;
   int centroid_iterations = 3;
 
-  // OpenMP threads for the particle weights (0 = OpenMP default). 1000 particles take 0.42 ms
-  // on one core and 0.37 ms on two (bench_mpf): the serial prediction and the integral volumes
+  // OpenMP threads for the particle weights (0 = OpenMP default). A second thread gains little
+  // (see docs/benchmarks.md (bench_mpf)): the serial prediction and the integral volumes
   // dominate, and in a nodelet manager a second team would compete with the reconstruction's.
   int threads = 1;
 

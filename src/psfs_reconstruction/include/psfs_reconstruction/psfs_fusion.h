@@ -23,8 +23,8 @@
 // Multi-projection test (needed at 16 mm and coarser): the voxel's 6 face centres (+-1/2
 // voxel along x, y, z) are projected per camera, each likelihood bilinearly interpolated, and
 // the median of the 6 is the camera's observation. Neighbouring voxels share a face, so each
-// face is sampled once (ProjectionTable): 3 lookups per voxel and camera instead of 6, which
-// is what brings the 64x64x48 volume under 2 ms on 2 cores with AVX-512 (docs/benchmarks.md).
+// face is sampled once (ProjectionTable): 3 lookups per voxel and camera instead of 6, for the
+// 64x64x48 volume's 2 ms target on 2 cores (see docs/benchmarks.md (bench_fusion)).
 // On the simulated rig the hull quality is unchanged within +-0.01 IoU.
 //
 // Implementation: log domain in 1/1024 fixed point, so the product over cameras is an integer

@@ -30,7 +30,8 @@
 //
 // Deterministic for a given seed, person and box (own uniform and shuffle code, not the
 // implementation-defined std:: distributions, so libstdc++ and libc++ agree).
-// Cost: ~0.1 s for a hand box at 1 mm (~40k samples, 0.3 us per candidate); 4x that at 0.5 mm.
+// Cost: per candidate, so 4x at half the spacing (a hand box at 1 mm: ~40k samples); see
+// docs/benchmarks.md (test_surface_samples prints the time of a hand box).
 // Candidates cover whole primitives that touch the box, so a big one barely inside costs its
 // whole area.
 #pragma once

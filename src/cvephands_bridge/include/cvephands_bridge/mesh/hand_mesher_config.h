@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "cvephands_bridge/marching_cubes.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
 #include "tabletop_common/config_schema.h"
 
 namespace cvephands {

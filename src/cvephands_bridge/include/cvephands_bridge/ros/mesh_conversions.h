@@ -9,8 +9,8 @@
 #include <tabletop_msgs/VoxelVolume.h>
 #include <visualization_msgs/Marker.h>
 
-#include "cvephands_bridge/probability_grid.h"
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/probability_grid.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands {
 

@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands {
 

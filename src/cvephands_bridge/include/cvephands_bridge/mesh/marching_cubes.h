@@ -7,7 +7,7 @@
 // Samples sit at the voxel centres; a cell joins 2x2x2 neighbouring samples. The mesh is
 // indexed (exactly one vertex per crossed grid edge), watertight on closed surfaces (every edge
 // in exactly two triangles: the case table is crack-free by construction, see
-// src/marching_cubes_cases.h), wound counter-clockwise seen from outside (low probability),
+// src/mesh/marching_cubes_cases.h), wound counter-clockwise seen from outside (low probability),
 // with per-vertex normals from the probability gradient (central differences at the samples,
 // interpolated along the edge like the position) pointing outward.
 //
@@ -19,18 +19,17 @@
 // byte-identical for any thread count.
 //
 // Why not VTK: bench/bench_meshing.cpp runs vtkFlyingEdges3D and vtkMarchingCubes on the same
-// bytes (2-core AMD EPYC, normals on, iso 153.5, identical triangle counts; docs/benchmarks.md):
-// two 83^3 hand volumes take 0.26 ms here vs 0.62 ms (flying edges, 2 TBB threads) and 7.0 ms
-// (marching cubes, single-threaded); on one thread 0.49 ms vs 1.2 ms (flying edges). A
-// 256x256x192 person: 2.2 ms vs 6.8 / 68 ms. VTK also has no "closed at the border" mode and
-// would be a heavy run-time dependency for one filter; it stays a benchmark-only one.
+// bytes (normals on, iso 153.5, identical triangle counts), and this code is the faster one on
+// hand volumes and on whole persons (figures: see docs/benchmarks.md (bench_meshing)). VTK also
+// has no "closed at the border" mode and would be a heavy run-time dependency for one filter;
+// it stays a benchmark-only one.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
-#include "cvephands_bridge/probability_grid.h"
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/probability_grid.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands {
 

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "cvephands_bridge/room_protocol.h"
+#include "cvephands_bridge/room/room_protocol.h"
 
 namespace cvephands {
 

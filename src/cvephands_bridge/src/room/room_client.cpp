@@ -1,4 +1,4 @@
-#include "cvephands_bridge/room_client.h"
+#include "cvephands_bridge/room/room_client.h"
 
 #include <atomic>
 #include <chrono>

@@ -20,8 +20,7 @@
 // from the mesh, where a grid's ring search grows with (distance / cell)^3 while the tree's cost
 // barely changes. Why not a library: nanoflann is not installed, PCL's KdTreeFLANN would pull in
 // PCL and FLANN for points only, and the triangle queries need the tree anyway.
-// Cost (one core, 2-core EPYC): 30k triangles x 100k samples 0.14 s (test_mesh_accuracy.cpp);
-// a 3.6 mm marching-cubes hand (9k triangles, 4.6k vertices) x 40k samples 0.04-0.08 s.
+// Cost: see docs/benchmarks.md (test_mesh_accuracy prints the time of a large mesh).
 #pragma once
 
 #include <cstddef>
@@ -31,7 +30,7 @@
 
 #include <Eigen/Core>
 
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands {
 

@@ -33,7 +33,7 @@
 // - A quantised mesh (vertices on a 1/16 voxel lattice, delta + varint coded, indices as
 //   varint differences, zstd): ~75 kB, 15 Mbit/s, ~18x the default: a marching-cubes mesh
 //   spends most of its bytes on connectivity that the mask implies for free.
-// Cost per 83^3 hand on one core: encode ~0.7 ms, decode ~0.35 ms (plus marching cubes ~0.5 ms).
+// Encode and decode cost per hand: see docs/benchmarks.md (bench_hand_codec).
 //
 // Wire format, version 1. All fields little endian; f64 = IEEE 754 binary64. Offsets in bytes.
 //   0  u8[4] magic "CVHS"
@@ -89,7 +89,7 @@
 
 #include <Eigen/Core>
 
-#include "cvephands_bridge/probability_grid.h"
+#include "cvephands_bridge/mesh/probability_grid.h"
 
 namespace cvephands {
 

@@ -12,7 +12,7 @@
 
 #include <Eigen/Core>
 
-#include "cvephands_bridge/hand_stream_codec.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "psfs_reconstruction/reconstructor.h"
 #include "tabletop_sim/simulated_rig.h"
 

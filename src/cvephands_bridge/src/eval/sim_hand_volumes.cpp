@@ -1,4 +1,4 @@
-#include "cvephands_bridge/sim_hand_volumes.h"
+#include "cvephands_bridge/eval/sim_hand_volumes.h"
 
 #include <cmath>
 #include <stdexcept>

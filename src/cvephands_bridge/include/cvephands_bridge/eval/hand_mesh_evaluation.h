@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "cvephands_bridge/marching_cubes.h"
-#include "cvephands_bridge/mesh_accuracy.h"
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
+#include "cvephands_bridge/mesh/mesh_accuracy.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 #include "tabletop_common/running_stats.h"
 
 namespace cvephands {

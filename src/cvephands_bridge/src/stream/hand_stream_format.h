@@ -1,5 +1,5 @@
 // Internals of the hand stream wire format shared by the encoder and the decoder (the format
-// itself is documented in include/cvephands_bridge/hand_stream_codec.h): header layout,
+// itself is documented in include/cvephands_bridge/stream/hand_stream_codec.h): header layout,
 // little-endian field access, CRC-32, varints, and the band classification both sides must
 // compute identically from the above-iso mask.
 #pragma once

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "cvephands_bridge/hand_stream_codec.h"
+#include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "hand_stream_format.h"
 
 namespace cvephands {

@@ -1,4 +1,4 @@
-#include "cvephands_bridge/room_protocol.h"
+#include "cvephands_bridge/room/room_protocol.h"
 
 #include <chrono>
 #include <cmath>

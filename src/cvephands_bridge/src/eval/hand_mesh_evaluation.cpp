@@ -1,4 +1,4 @@
-#include "cvephands_bridge/hand_mesh_evaluation.h"
+#include "cvephands_bridge/eval/hand_mesh_evaluation.h"
 
 #include <algorithm>
 #include <array>
@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "cvephands_bridge/mesh_components.h"
-#include "cvephands_bridge/sim_hand_volumes.h"
+#include "cvephands_bridge/eval/sim_hand_volumes.h"
+#include "cvephands_bridge/mesh/mesh_components.h"
 #include "tabletop_sim/surface_samples.h"
 
 namespace cvephands {

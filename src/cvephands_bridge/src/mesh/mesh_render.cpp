@@ -1,4 +1,4 @@
-#include "cvephands_bridge/mesh_render.h"
+#include "cvephands_bridge/mesh/mesh_render.h"
 
 #include <algorithm>
 #include <cmath>

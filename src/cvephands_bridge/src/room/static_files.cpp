@@ -1,4 +1,4 @@
-#include "cvephands_bridge/static_files.h"
+#include "cvephands_bridge/room/static_files.h"
 
 #include <algorithm>
 #include <system_error>

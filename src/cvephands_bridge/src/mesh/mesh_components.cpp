@@ -1,4 +1,4 @@
-#include "cvephands_bridge/mesh_components.h"
+#include "cvephands_bridge/mesh/mesh_components.h"
 
 #include <numeric>
 

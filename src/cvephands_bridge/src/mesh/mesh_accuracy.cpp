@@ -1,4 +1,4 @@
-#include "cvephands_bridge/mesh_accuracy.h"
+#include "cvephands_bridge/mesh/mesh_accuracy.h"
 
 #include <algorithm>
 #include <array>

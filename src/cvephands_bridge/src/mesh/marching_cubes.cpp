@@ -1,4 +1,4 @@
-#include "cvephands_bridge/marching_cubes.h"
+#include "cvephands_bridge/mesh/marching_cubes.h"
 
 #include <omp.h>
 

@@ -1,4 +1,4 @@
-#include "cvephands_bridge/face_video.h"
+#include "cvephands_bridge/video/face_video.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "hand_stream_format.h"
+#include "../stream/hand_stream_format.h"
 
 namespace cvephands {
 namespace {

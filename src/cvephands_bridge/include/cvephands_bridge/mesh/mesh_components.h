@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cvephands_bridge/triangle_mesh.h"
+#include "cvephands_bridge/mesh/triangle_mesh.h"
 
 namespace cvephands {
 

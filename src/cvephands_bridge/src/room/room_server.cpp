@@ -1,0 +1,189 @@
+// RoomServer and ServerCore's life: option checks, listen and accept loop, stop, admission.
+#include "cvephands_bridge/room/room_server.h"
+
+#include <chrono>
+#include <stdexcept>
+
+#include "room_server_internal.h"
+
+namespace cvephands {
+namespace room_server_internal {
+namespace {
+
+bool sameToken(const std::string& expected, const std::string& given) {
+  if (expected.size() != given.size()) return false;
+  unsigned char diff = 0;  // no early exit: timing does not tell how much matched
+  for (size_t i = 0; i < expected.size(); ++i) diff |= uint8_t(expected[i] ^ given[i]);
+  return diff == 0;
+}
+
+}  // namespace
+
+ServerCore::ServerCore(const RoomServerOptions& options) : options_(options) {
+  if (options_.queue_length < 1) throw std::invalid_argument("RoomServer: queue_length < 1");
+  if (options_.max_message_size < 1)
+    throw std::invalid_argument("RoomServer: max_message_size < 1");
+  if (options_.seats.seats < 1) throw std::invalid_argument("RoomServer: seats < 1");
+  if (options_.threads < 1) throw std::invalid_argument("RoomServer: threads < 1");
+  if (!(options_.stall_timeout > 0) || !(options_.join_timeout > 0) || options_.idle_timeout < 0)
+    throw std::invalid_argument("RoomServer: timeouts must be positive");
+}
+
+ServerCore::~ServerCore() {
+  stop();
+  // Handlers still queued (only after a forced stop) die with the io_context; they may own
+  // sessions whose destructors call unregisterConnection, so this must go first.
+  acceptor_.reset();
+  ioc_.reset();
+}
+
+void ServerCore::start() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (running_ || stopping_) throw std::logic_error("RoomServer::start: call once");
+  }
+  if (!options_.static_root.empty()) {
+    std::error_code ec;
+    root_ = std::filesystem::canonical(options_.static_root, ec);
+    if (ec || !std::filesystem::is_directory(root_))
+      throw std::runtime_error("RoomServer: static_root is not a directory: " +
+                               options_.static_root);
+  }
+  try {
+    const tcp::endpoint endpoint(net::ip::make_address(options_.bind_address), options_.port);
+    acceptor_.emplace(net::make_strand(*ioc_));
+    acceptor_->open(endpoint.protocol());
+    acceptor_->set_option(net::socket_base::reuse_address(true));
+    acceptor_->bind(endpoint);
+    acceptor_->listen(net::socket_base::max_listen_connections);
+    port_ = acceptor_->local_endpoint().port();
+    loopback_bind_ = endpoint.address().is_loopback();
+  } catch (const boost::system::system_error& e) {
+    acceptor_.reset();
+    throw std::runtime_error("RoomServer: cannot listen on " + options_.bind_address + ":" +
+                             std::to_string(options_.port) + ": " + e.what());
+  }
+  work_.emplace(ioc_->get_executor());
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    running_ = true;
+    threads_running_ = options_.threads;
+  }
+  net::post(acceptor_->get_executor(), [this] { doAccept(); });
+  for (int i = 0; i < options_.threads; ++i)
+    threads_.emplace_back([this] {
+      ioc_->run();
+      std::lock_guard<std::mutex> lock(mutex_);
+      --threads_running_;
+      threads_done_.notify_all();
+    });
+}
+
+void ServerCore::doAccept() {
+  acceptor_->async_accept(
+      net::make_strand(*ioc_), [this](beast::error_code ec, tcp::socket socket) {
+        if (ec == net::error::operation_aborted || !acceptor_->is_open()) return;
+        if (!ec) {
+          ++connections;
+          beast::error_code ignored;
+          socket.set_option(tcp::no_delay(true), ignored);  // small hand messages: no Nagle delay
+          startHttpSession(*this, std::move(socket));
+        }
+        doAccept();
+      });
+}
+
+void ServerCore::stop() {
+  std::vector<std::weak_ptr<Connection>> live;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!running_) return;
+    stopping_ = true;  // connections accepted from now on close at once
+    for (const auto& c : connections_) live.push_back(c.second);
+  }
+  net::post(acceptor_->get_executor(), [this] {
+    beast::error_code ignored;
+    acceptor_->close(ignored);
+  });
+  for (const auto& weak : live)
+    if (const auto c = weak.lock()) c->shutdown();
+  live.clear();
+  work_.reset();
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    // Sessions cut themselves after kShutdownGrace; beyond that something is stuck.
+    if (!threads_done_.wait_for(lock, kShutdownGrace + std::chrono::seconds(1),
+                                [this] { return threads_running_ == 0; }))
+      ioc_->stop();
+  }
+  for (std::thread& t : threads_) t.join();
+  threads_.clear();
+  std::vector<std::shared_ptr<WsSession>> members;  // released outside the lock
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (auto& r : rooms_)
+      for (auto& m : r.second.members) members.push_back(std::move(m));
+    rooms_.clear();
+    running_ = false;
+  }
+}
+
+bool ServerCore::originAllowed(const http::request<http::string_body>& req) const {
+  const beast::string_view origin = req[http::field::origin];
+  if (origin.empty()) return true;  // not a browser: the token is the guard
+  const beast::string_view host = req[http::field::host];
+  if (loopback_bind_) {
+    // The host part of Host, without the port ("[::1]:80", "localhost:80", "127.0.0.1").
+    const beast::string_view name =
+        host.substr(0, host.size() && host[0] == '[' ? host.find(']') + 1 : host.rfind(':'));
+    const bool loopback_name =
+        beast::iequals(name, "localhost") || name == "[::1]" || name.substr(0, 4) == "127.";
+    if (!loopback_name) return false;
+  }
+  for (const std::string& allowed : options_.allowed_origins)
+    if (allowed == "*" || beast::iequals(allowed, origin)) return true;
+  // Same origin: the page came from this server, so Origin is scheme://<Host header>.
+  for (const beast::string_view scheme : {"http://", "https://"})
+    if (origin.substr(0, scheme.size()) == scheme)
+      return beast::iequals(origin.substr(scheme.size()), host);
+  return false;
+}
+
+Admission ServerCore::registerConnection(Connection* c, std::weak_ptr<Connection> weak,
+                                         bool websocket) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stopping_) return Admission::kStopping;
+  size_t& count = websocket ? websockets_ : https_;
+  const size_t limit = websocket ? options_.max_clients : options_.max_http_connections;
+  connections_[c] = std::move(weak);
+  ++count;
+  return count > limit ? Admission::kFull : Admission::kOk;
+}
+
+void ServerCore::unregisterConnection(Connection* c, bool websocket) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  connections_.erase(c);
+  --(websocket ? websockets_ : https_);
+}
+
+bool ServerCore::tokenOk(const std::string& given) const {
+  return options_.token.empty() || sameToken(options_.token, given);
+}
+
+}  // namespace room_server_internal
+
+// ---- RoomServer -------------------------------------------------------------------------------
+
+struct RoomServer::Impl : room_server_internal::ServerCore {
+  using room_server_internal::ServerCore::ServerCore;
+};
+
+RoomServer::RoomServer(const RoomServerOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+RoomServer::~RoomServer() = default;
+void RoomServer::start() { impl_->start(); }
+void RoomServer::stop() { impl_->stop(); }
+uint16_t RoomServer::port() const { return impl_->port(); }
+const RoomServerOptions& RoomServer::options() const { return impl_->options(); }
+RoomServerStats RoomServer::stats() const { return impl_->stats(); }
+
+}  // namespace cvephands

@@ -1,0 +1,182 @@
+// Private to the room server files: the connection classes, ServerCore and what they share.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+
+#include "cvephands_bridge/room/room_server.h"
+
+namespace cvephands {
+namespace room_server_internal {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using tcp = net::ip::tcp;
+using Clock = std::chrono::steady_clock;
+using Bytes = std::shared_ptr<const std::string>;
+
+// After an error message: time for it and the close handshake to go out before the socket is
+// cut (a stalled client never reads them).
+constexpr auto kCloseGrace = std::chrono::seconds(2);
+constexpr auto kShutdownGrace = std::chrono::milliseconds(500);
+
+class ServerCore;
+
+// What stop() needs of every live connection.
+class Connection {
+ public:
+  virtual ~Connection() = default;
+  virtual void shutdown() = 0;  // any thread
+};
+
+enum class Admission { kOk, kFull, kStopping };
+
+// One WebSocket participant. All its state lives on its strand (the socket's executor); other
+// connections reach it only through deliver() and shutdown(), which post there.
+class WsSession : public Connection, public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(ServerCore& server, beast::tcp_stream&& stream)
+      : server_(server), ws_(std::move(stream)), timer_(ws_.get_executor()) {}
+  ~WsSession() override;
+
+  void run(http::request<http::string_body> upgrade);
+  void shutdown() override;
+  // Queue a message for this client (any thread).
+  void deliver(Bytes message, bool binary);
+
+  // Identity: set by ServerCore::join under its mutex, read there too (and on this strand).
+  uint32_t id = 0;
+  std::string room, name;
+  room::Role role = room::Role::kRig;
+  int seat = -1;
+  uint32_t sequence = 0;  // binary messages received (relay header)
+  std::atomic<uint64_t> messages_in{0}, bytes_in{0}, messages_out{0}, bytes_out{0}, dropped{0};
+  std::atomic<size_t> queued{0};
+
+ private:
+  struct Outgoing {
+    Bytes data;
+    bool binary = false;
+    bool close = false;  // the close frame (data unused)
+    websocket::close_reason close_reason;
+  };
+
+  void onAccept(beast::error_code ec, bool full);
+  void doRead();
+  void onRead(beast::error_code ec);
+  void handleText(std::string_view text);
+  void handleBinary();
+  void enqueue(Bytes message, bool binary);
+  void writeNext();
+  void onWrite(beast::error_code ec, size_t bytes);
+  // Error message, close handshake, and the socket cut after `grace` whatever happens.
+  void kick(const std::string& reason, const std::string& detail,
+            Clock::duration grace = kCloseGrace, bool count = true);
+  void hardKick(const std::string& reason);  // cut now (nothing can be written any more)
+  void end();
+
+  ServerCore& server_;
+  websocket::stream<beast::tcp_stream> ws_;
+  net::steady_timer timer_;  // join timeout, then the close grace
+  http::request<http::string_body> upgrade_;
+  beast::flat_buffer in_;
+  std::deque<Outgoing> queue_;  // waiting, not counting the one being written
+  size_t queued_binary_ = 0;
+  Outgoing in_flight_;
+  bool writing_ = false;
+  Clock::time_point write_started_;
+  bool registered_ = false, joined_ = false, closing_ = false, dead_ = false;
+};
+
+// Plain HTTP on a freshly accepted socket (room_server_http.cpp): static files, and the upgrade
+// to a WsSession on /ws.
+void startHttpSession(ServerCore& server, tcp::socket&& socket);
+
+class ServerCore {
+ public:
+  explicit ServerCore(const RoomServerOptions& options);  // throws on bad options
+  ~ServerCore();
+
+  void start();
+  void stop();
+  uint16_t port() const { return port_; }
+  const RoomServerOptions& options() const { return options_; }
+  const std::filesystem::path& root() const { return root_; }
+  RoomServerStats stats() const;
+
+  Admission registerConnection(Connection* c, std::weak_ptr<Connection> weak, bool websocket);
+  void unregisterConnection(Connection* c, bool websocket);
+  bool originAllowed(const http::request<http::string_body>& req) const;
+  bool tokenOk(const std::string& given) const;
+  // Seats the session and sends the new participants list to the others; the session queues
+  // *welcome and *list itself. False with an error reason when the room is full.
+  bool join(const std::shared_ptr<WsSession>& s, const room::JoinRequest& request, Bytes* welcome,
+            Bytes* list, std::string* reason, std::string* detail);
+  void leave(WsSession* s);
+  void relay(WsSession& sender, const beast::flat_buffer& payload);
+  void countKick(const std::string& reason);
+  std::atomic<uint64_t> dropped{0}, http_requests{0}, connections{0};
+
+ private:
+  struct Totals {
+    uint64_t messages_in = 0, bytes_in = 0, messages_out = 0, bytes_out = 0, dropped = 0;
+    void add(const WsSession& s) {
+      messages_in += s.messages_in, bytes_in += s.bytes_in, messages_out += s.messages_out;
+      bytes_out += s.bytes_out, dropped += s.dropped;
+    }
+  };
+  struct Room {
+    std::vector<std::shared_ptr<WsSession>> members;  // by id
+    // Copy-on-write view for relays: taking it costs one lock and one refcount.
+    std::shared_ptr<const std::vector<std::shared_ptr<WsSession>>> snapshot;
+    std::vector<bool> seat_taken;
+    Totals departed;
+  };
+
+  void doAccept();
+  Bytes participantsMessage(const std::string& name, const Room& r) const;  // under mutex_
+
+  RoomServerOptions options_;
+  std::filesystem::path root_;
+  uint16_t port_ = 0;
+  bool loopback_bind_ = true;
+
+  mutable std::mutex mutex_;  // everything below
+  bool running_ = false, stopping_ = false;
+  std::unordered_map<Connection*, std::weak_ptr<Connection>> connections_;
+  size_t websockets_ = 0, https_ = 0;
+  std::map<std::string, Room> rooms_;
+  std::map<std::string, uint64_t> kicked_;
+  uint32_t next_id_ = 1;
+  std::condition_variable threads_done_;
+  int threads_running_ = 0;
+
+  std::unique_ptr<net::io_context> ioc_ = std::make_unique<net::io_context>();
+  std::optional<tcp::acceptor> acceptor_;
+  std::optional<net::executor_work_guard<net::io_context::executor_type>> work_;
+  std::vector<std::thread> threads_;
+};
+
+}  // namespace room_server_internal
+}  // namespace cvephands
