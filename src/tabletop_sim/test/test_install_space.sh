@@ -107,6 +107,16 @@ for p in $PKGS; do
 done
 case_result rospack_finds_every_package "${fail:+FAIL: $fail}"
 
+# ---- every installed program and library finds its libraries ----------------------------------
+# (an installed tool linking a library that is built but not installed fails only when run)
+fail=""
+for f in "$INSTALL"/lib/*.so "$INSTALL"/lib/*/*; do
+  [ -f "$f" ] && head -c 4 "$f" | grep -q "ELF" || continue
+  missing=$(inenv "ldd '$f'" 2>>"$LOG" | grep 'not found' | awk '{print $1}' | tr '\n' ' ')
+  [ -n "$missing" ] && fail="${fail}$(basename "$f") needs ${missing}; "
+done
+case_result installed_binaries_link "${fail:+FAIL: $fail}"
+
 # ---- room server ----------------------------------------------------------------------------
 DIST="$INSTALL/share/cvephands_bridge/web/dist"
 # The browser client in the source tree (scripts/setup.sh builds it with npm after catkin_make).
