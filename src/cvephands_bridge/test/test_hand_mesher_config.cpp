@@ -1,29 +1,17 @@
 // config/hand_mesher.yaml through the strict loader: the shipped file holds the defaults, a bad
 // file names itself and the key, and the byte iso level is the half-integer of the thesis' 0.6.
-#include <cstdio>
-#include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "cvephands_bridge/mesh/hand_mesher_config.h"
+#include "tabletop_common/config_test_support.h"
 
 namespace cvephands {
 namespace {
 
 std::string errorOf(const std::string& text) {
-  const std::string path = "/tmp/hand_mesher_cfg_" + std::to_string(::getpid()) + ".yaml";
-  std::ofstream(path) << text;
-  std::string what;
-  try {
-    loadHandMesherConfig(path);
-  } catch (const std::runtime_error& e) {
-    what = e.what();
-    EXPECT_NE(what.find(path + ": "), std::string::npos) << what;
-  }
-  std::remove(path.c_str());
-  return what;
+  return tabletop_common::config_test::errorOf([](const std::string& p) { loadHandMesherConfig(p); }, text);
 }
 
 TEST(HandMesherConfig, ShippedFileHoldsTheDefaults) {
@@ -32,8 +20,7 @@ TEST(HandMesherConfig, ShippedFileHoldsTheDefaults) {
   tabletop_common::ConfigSchema schema;
   HandMesherConfig scratch;
   addHandMesherKeys(&scratch, &schema);
-  const YAML::Node file = YAML::LoadFile(path);
-  for (const std::string& k : schema.keys()) EXPECT_TRUE(file[k]) << k << " is not in the file";
+  EXPECT_TRUE(tabletop_common::config_test::keysMissingFrom(schema, path).empty());
   EXPECT_EQ(c.iso, d.iso);
   EXPECT_EQ(c.mode, d.mode);
   EXPECT_EQ(c.close_at_border, d.close_at_border);

@@ -1,34 +1,18 @@
 // config/mpf.yaml through the strict loader: the shipped file holds the code's defaults, and a
 // bad file names itself and the key.
-#include <cstdio>
-#include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "hand_tracking/mpf_config.h"
 #include "hand_tracking/mpf_tracker.h"
+#include "tabletop_common/config_test_support.h"
 
 namespace hand_tracking {
 namespace {
 
-std::string tempFile(const std::string& text) {
-  const std::string path = "/tmp/mpf_cfg_" + std::to_string(::getpid()) + ".yaml";
-  std::ofstream(path) << text;
-  return path;
-}
-
 std::string errorOf(const std::string& text) {
-  const std::string path = tempFile(text);
-  try {
-    loadMpfConfig(path);
-  } catch (const std::runtime_error& e) {
-    std::remove(path.c_str());
-    return e.what();
-  }
-  std::remove(path.c_str());
-  return "";
+  return tabletop_common::config_test::errorOf([](const std::string& p) { loadMpfConfig(p); }, text);
 }
 
 TEST(MpfConfig, ShippedFileHoldsTheDefaults) {
@@ -39,8 +23,8 @@ TEST(MpfConfig, ShippedFileHoldsTheDefaults) {
   tabletop_common::ConfigSchema schema;
   MpfConfig scratch;
   addMpfKeys(&scratch, &schema);
-  const YAML::Node file = YAML::LoadFile(std::string(HAND_TRACKING_CONFIG_DIR) + "/mpf.yaml");
-  for (const std::string& k : schema.keys()) EXPECT_TRUE(file[k]) << k << " is not in config/mpf.yaml";
+  EXPECT_TRUE(tabletop_common::config_test::keysMissingFrom(schema, std::string(HAND_TRACKING_CONFIG_DIR) + "/mpf.yaml")
+                  .empty());
   EXPECT_EQ(c.params.hand_particles, d.hand_particles);
   EXPECT_EQ(c.params.head_particles, d.head_particles);
   EXPECT_EQ(c.params.head_box, d.head_box);
@@ -95,9 +79,10 @@ TEST(MpfConfig, BadFilesNameTheFileAndTheKey) {
   EXPECT_NE(errorOf("hand_particles: 0\n").find("hand_particles"), std::string::npos);  // validate()
   EXPECT_NE(errorOf("seed: -3\n").find("seed: must be >= 0"), std::string::npos);
   EXPECT_NE(errorOf("[1, 2").find("cannot read"), std::string::npos);
-  const std::string path = tempFile("hand_particles: 800\nhead_box: [0.2, 0.2, 0.25]\n");
-  const MpfConfig c = loadMpfConfig(path);
-  std::remove(path.c_str());
+  MpfConfig c;
+  EXPECT_EQ(tabletop_common::config_test::errorOf([&](const std::string& p) { c = loadMpfConfig(p); },
+                                                  "hand_particles: 800\nhead_box: [0.2, 0.2, 0.25]\n"),
+            "");
   EXPECT_EQ(c.params.hand_particles, 800);
   EXPECT_EQ(c.params.head_box, Eigen::Vector3d(0.2, 0.2, 0.25));
   EXPECT_EQ(c.params.head_particles, MpfParams().head_particles);  // missing = default

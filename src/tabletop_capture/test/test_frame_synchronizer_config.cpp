@@ -1,29 +1,18 @@
 // config/frame_synchronizer.yaml through the strict loader: the shipped file holds the
 // defaults, a bad file names itself and the key, and live tuning changes only the timing.
-#include <cstdio>
-#include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "tabletop_capture/frame_synchronizer_config.h"
+#include "tabletop_common/config_test_support.h"
 
 namespace tabletop_capture {
 namespace {
 
 std::string errorOf(const std::string& text) {
-  const std::string path = "/tmp/sync_cfg_" + std::to_string(::getpid()) + ".yaml";
-  std::ofstream(path) << text;
-  std::string what;
-  try {
-    loadFrameSynchronizerConfig(path);
-  } catch (const std::runtime_error& e) {
-    what = e.what();
-    EXPECT_NE(what.find(path + ": "), std::string::npos) << what;
-  }
-  std::remove(path.c_str());
-  return what;
+  return tabletop_common::config_test::errorOf([](const std::string& p) { loadFrameSynchronizerConfig(p); },
+                                               text);
 }
 
 TEST(FrameSynchronizerConfig, ShippedFileHoldsTheDefaults) {
@@ -32,8 +21,7 @@ TEST(FrameSynchronizerConfig, ShippedFileHoldsTheDefaults) {
   tabletop_common::ConfigSchema schema;
   FrameSynchronizerConfig scratch;
   addFrameSynchronizerKeys(&scratch, &schema);
-  const YAML::Node file = YAML::LoadFile(path);
-  for (const std::string& k : schema.keys()) EXPECT_TRUE(file[k]) << k << " is not in the file";
+  EXPECT_TRUE(tabletop_common::config_test::keysMissingFrom(schema, path).empty());
   EXPECT_EQ(c.num_cameras, d.num_cameras);
   EXPECT_EQ(c.camera_prefix, d.camera_prefix);
   EXPECT_EQ(c.tolerance, d.tolerance);

@@ -1,9 +1,13 @@
 // The one loader of every stage's parameters: nested keys as paths, aliases, strict errors.
+#include <cstdio>
+#include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "tabletop_common/config_schema.h"
+#include "tabletop_common/config_test_support.h"
 
 namespace tabletop_common {
 namespace {
@@ -88,6 +92,17 @@ TEST(ConfigSchema, OverridesGoThroughTheSameChecks) {
   EXPECT_THROW(s.set("threads", YAML::Node("two"), "rosparam ~"), std::runtime_error);
   EXPECT_EQ(p.threads, 3);  // a refused value changes nothing
   EXPECT_THROW(ConfigSchema().alias("a", "missing"), std::logic_error);
+}
+
+TEST(ConfigSchema, TestSupportFindsKeysAShippedFileLeavesOut) {
+  Params p;
+  const ConfigSchema s = schemaOf(&p);
+  const std::string path = "/tmp/config_schema_keys_" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(path) << "fusion: {body: {threshold: 0.8}}\nnodelet: {threads: 2}\nupdate: true\n"
+                         "name: r\ncolor: [1]\n";
+  EXPECT_EQ(config_test::keysMissingFrom(s, path), std::vector<std::string>{"volume/size"});
+  std::remove(path.c_str());
+  EXPECT_EQ(config_test::errorOf([&](const std::string& f) { s.loadFile(f); }, "nam: r\n").substr(0, 5), "/tmp/");
 }
 
 }  // namespace
