@@ -80,6 +80,11 @@ struct PsfsOptions {
   double drop_threshold = 0.0;  // 0 = threshold
   int min_views = 2;            // >= 1
   bool multi_projection = false;   // needs a table and evidence built for it
+  // Footprint-filtered evidence (issue 17 prototype; exclusive with multi_projection): the
+  // single-projection kernel reads, per voxel and camera, the evidence filtered over a window
+  // matched to the voxel's projected size. Needs a table built with footprint_levels and
+  // evidence set with a FootprintFilter of at least as many levels.
+  bool footprint = false;
   bool zero_outside_hull = false;  // store 0 instead of the posterior where p <= t
   int threads = 0;                 // OpenMP threads (0 = OpenMP default)
 };
