@@ -74,6 +74,11 @@ PSFS_TARGET_CLONES void columnMeans(const uint16_t* const* r, int W, int R, uint
   }
 }
 
+// out = lut[in] (a gather GCC leaves scalar; restrict keeps the loads out of the stores' way).
+void lookupRow(const uint8_t* __restrict in, const int16_t* __restrict lut, int W, int16_t* __restrict out) {
+  for (int u = 0; u < W; ++u) out[u] = lut[in[u]];
+}
+
 void checkRadius(int R) {
   if (R != 1 && R != 2) throw std::invalid_argument("psfs: footprint filter radius must be 1 or 2");
 }
@@ -107,21 +112,19 @@ void meanFilterTerms(const uint8_t* src, int W, int H, int R, const int16_t* lut
                      FootprintScratch* s) {
   checkRadius(R);
   s->sums.resize(size_t(W) * H);
-  s->bytes.resize(size_t(W) + 2 * R);
+  s->bytes.resize(size_t(2) * W + 2 * R);
   uint16_t* sums = s->sums.data();
   uint8_t* pad = s->bytes.data();
+  uint8_t* means = pad + W + 2 * R;
   for (int v = 0; v < H; ++v) {
     padRow(src + size_t(v) * W, W, R, pad);
     rowSums(pad, W, R, sums + size_t(v) * W);
   }
   const uint16_t* r[5];
-  thread_local std::vector<uint8_t> means;
-  means.resize(size_t(W));
   for (int v = 0; v < H; ++v) {
     for (int k = -R; k <= R; ++k) r[k + R] = sums + size_t(std::clamp(v + k, 0, H - 1)) * W;
-    columnMeans(r, W, R, means.data());
-    int16_t* o = dst + size_t(v) * W;
-    for (int u = 0; u < W; ++u) o[u] = lut[means[u]];
+    columnMeans(r, W, R, means);
+    lookupRow(means, lut, W, dst + size_t(v) * W);
   }
 }
 
