@@ -26,6 +26,11 @@
 // face is sampled once (ProjectionTable): 3 lookups per voxel and camera instead of 6, which
 // is what brings the 64x64x48 volume under 2 ms on 2 cores with AVX-512 (docs/benchmarks.md).
 // On the simulated rig the hull quality is unchanged within +-0.01 IoU.
+// Footprint-filtered evidence (PsfsOptions::footprint, issue 17 prototype, off by default):
+// the footprint statistic comes from evidence images filtered once per frame (ViewEvidence,
+// FootprintFilter) and a table that points each voxel at the window of its projected size
+// (ProjectionTableOptions::footprint_levels), so fusion is the single-projection kernel, one
+// lookup per voxel and camera; docs/benchmarks.md has its cost and quality.
 //
 // Implementation: log domain in 1/1024 fixed point, so the product over cameras is an integer
 // sum. The uint8 -> log-term table is applied once per pixel and frame (ViewEvidence), so the
