@@ -3,7 +3,9 @@
 // with classifier-like noise. In the same run: foreground-class pSfS at the three reference
 // resolutions (multi-projection at 16 mm), two 83^3 hand sub-volumes that move every frame
 // (projected on the fly), the binary SfS baseline on the same projection tables, 1 and 2
-// threads, the scalar kernels, the per-frame image preparation and the table builds.
+// threads, the scalar kernels, the per-frame image preparation and the table builds. Issue 17
+// prototype: the footprint-filtered evidence (one lookup per voxel and camera) beside them,
+// with and without its per-frame filtering in the timed loop.
 //
 //   bench_fusion --benchmark_filter=... --benchmark_repetitions=5
 #include <benchmark/benchmark.h>
@@ -29,7 +31,8 @@ struct Workload {
       {Eigen::Vector3d(-0.15, 0.05, 0.15), 0.045},  // hands
       {Eigen::Vector3d(0.18, 0.08, 0.2), 0.045}};
   std::vector<ViewImage> views;
-  ViewEvidence single, bilinear;
+  ViewEvidence single, bilinear, footprint;
+  static FootprintFilter filter() { return FootprintFilter{3, FootprintStatistic::kMedian}; }
   Workload() {
     for (size_t c = 0; c < rig.cameras.size(); ++c) {
       const cv::Mat mask = test::sphereLikelihood(rig.cameras[c], person, 255, 0);
@@ -39,6 +42,7 @@ struct Workload {
     }
     single.set(views, false);
     bilinear.set(views, true);
+    footprint.set(views, false, 0, filter());
   }
 };
 
@@ -63,6 +67,20 @@ void BM_Evidence(benchmark::State& st) {
   st.SetLabel(bil ? "8 views, terms + pairs" : "8 views, terms");
 }
 BENCHMARK(BM_Evidence)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"bilinear", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Footprint levels: range(0) 0 = median, 1 = mean.
+void BM_EvidenceFootprint(benchmark::State& st) {
+  Workload& w = workload();
+  FootprintFilter f = Workload::filter();
+  f.statistic = st.range(0) ? FootprintStatistic::kMean : FootprintStatistic::kMedian;
+  ViewEvidence ev;
+  for (auto _ : st) {
+    ev.set(w.views, false, static_cast<int>(st.range(1)), f);
+    benchmark::DoNotOptimize(ev.terms(0));
+  }
+  st.SetLabel(std::string("8 views, terms + 2 footprint levels, ") + (st.range(0) ? "mean" : "median"));
+}
+BENCHMARK(BM_EvidenceFootprint)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"mean", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
 
 // ---- table builds -------------------------------------------------------------------------
 void BM_TableBuild(benchmark::State& st) {
@@ -133,6 +151,63 @@ void BM_PsfsSingle16(benchmark::State& st) {
 }
 BENCHMARK(BM_PsfsSingle16)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// Footprint-filtered evidence (issue 17 prototype): the single-projection kernel on a table
+// with footprint levels. range(0): mm; range(1): threads; range(2): 1 = the per-frame evidence
+// (terms and the 2 median-filtered levels, ViewEvidence::set) inside the timed loop;
+// range(3): 1 = scalar kernels.
+void BM_PsfsFootprint(benchmark::State& st) {
+  Workload& w = workload();
+  const int res = static_cast<int>(st.range(0));
+  ProjectionTableOptions to;
+  to.footprint_levels = 3;
+  const ProjectionTable table(gridFor(res), w.rig.cameras, to);
+  PsfsOptions o;
+  o.footprint = true;
+  o.threads = static_cast<int>(st.range(1));
+  const PsfsFusion fusion(o);
+  const bool with_evidence = st.range(2) != 0;
+  forceScalarKernels(st.range(3) != 0);
+  ViewEvidence ev;
+  ev.set(w.views, false, o.threads, Workload::filter());
+  ProbabilityVolume out;
+  for (auto _ : st) {
+    if (with_evidence) ev.set(w.views, false, o.threads, Workload::filter());
+    fusion.fuse(table, ev, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  forceScalarKernels(false);
+  st.counters["voxels_in"] = static_cast<double>(countAbove(out, thresholdByte(o.threshold)));
+  st.SetLabel(table.grid().describe() + ", footprint levels" + (with_evidence ? " + evidence" : "") +
+              (table.precomputed() ? ", stored table" : ", projected on the fly") +
+              (st.range(3) ? ", scalar" : avx512KernelsActive() ? ", AVX-512" : ", AVX2"));
+}
+BENCHMARK(BM_PsfsFootprint)
+    ->ArgsProduct({{16, 8}, {1, 2}, {0, 1}, {0}})
+    ->Args({16, 1, 0, 1})
+    ->ArgNames({"mm", "threads", "evidence", "scalar"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// The multi-projection with its per-frame evidence (terms + pair images) in the loop: the
+// like-for-like partner of BM_PsfsFootprint/evidence:1.
+void BM_PsfsMultiWithEvidence(benchmark::State& st) {
+  Workload& w = workload();
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(gridFor(16), w.rig.cameras, to);
+  PsfsOptions o;
+  o.multi_projection = true;
+  o.threads = static_cast<int>(st.range(0));
+  const PsfsFusion fusion(o);
+  ViewEvidence ev;
+  ProbabilityVolume out;
+  for (auto _ : st) {
+    ev.set(w.views, true, o.threads);
+    fusion.fuse(table, ev, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  st.SetLabel(table.grid().describe() + ", multi-projection + evidence");
+}
+BENCHMARK(BM_PsfsMultiWithEvidence)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+
 // Binary SfS baseline on the same tables (carving only; silhouettes set once: thresholding
 // the 8 images is the image part, timed in BM_BinarySilhouettes).
 void BM_Binary(benchmark::State& st) {
@@ -190,6 +265,39 @@ void BM_HandSubVolumes(benchmark::State& st) {
               ", projected on the fly");
 }
 BENCHMARK(BM_HandSubVolumes)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// The same with footprint levels (3.6 mm voxels are ~1 px wide: mostly the 3x3 level).
+// range(1): 1 = the footprint evidence (ViewEvidence::set) inside the timed loop.
+void BM_HandSubVolumesFootprint(benchmark::State& st) {
+  Workload& w = workload();
+  PsfsOptions o;
+  o.threads = static_cast<int>(st.range(0));
+  o.footprint = true;
+  const PsfsFusion fusion(o);
+  ProjectionTableOptions to;
+  to.storage = TableStorage::kOnTheFly;
+  to.footprint_levels = 3;
+  const Eigen::Vector3d hands[2] = {w.person[4].centre, w.person[5].centre};
+  ProjectionTable tables[2] = {ProjectionTable(cubeGrid(hands[0], 0.3, 83), w.rig.cameras, to),
+                               ProjectionTable(cubeGrid(hands[1], 0.3, 83), w.rig.cameras, to)};
+  const bool with_evidence = st.range(1) != 0;
+  ViewEvidence ev;
+  ev.set(w.views, false, o.threads, Workload::filter());
+  ProbabilityVolume out[2];
+  int frame = 0;
+  for (auto _ : st) {
+    if (with_evidence) ev.set(w.views, false, o.threads, Workload::filter());
+    const Eigen::Vector3d step(0.003 * (frame % 5), 0.002 * (frame % 3), 0.0);
+    for (int h = 0; h < 2; ++h) {
+      tables[h].update(snappedCubeGrid(hands[h] + step, 0.3, 83), w.rig.cameras);
+      fusion.fuse(tables[h], ev, &out[h]);
+    }
+    ++frame;
+    benchmark::DoNotOptimize(out[1].data.data());
+  }
+  st.SetLabel(std::string("2 x 83^3, projected on the fly, footprint levels") + (with_evidence ? " + evidence" : ""));
+}
+BENCHMARK(BM_HandSubVolumesFootprint)->ArgsProduct({{1, 2}, {0, 1}})->ArgNames({"threads", "evidence"})->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_HandSubVolumesBinary(benchmark::State& st) {
   Workload& w = workload();

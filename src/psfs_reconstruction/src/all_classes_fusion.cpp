@@ -29,6 +29,7 @@ void AllClassesFusion::fuse(const ProjectionTable& table, const ViewEvidence& ev
                             ProbabilityVolume* out) const {
   if (!out) throw std::invalid_argument("psfs::AllClassesFusion::fuse: null output");
   detail::checkInputs(table, evidence, options_.multi_projection, "psfs::AllClassesFusion::fuse");
+  detail::checkFootprint(table, evidence, false, "psfs::AllClassesFusion::fuse");
   const int C = table.numCameras();
   if (C > 16) throw std::invalid_argument("psfs::AllClassesFusion::fuse: more than 16 cameras");
   const std::vector<detail::KernelView> views = detail::kernelViews(evidence);

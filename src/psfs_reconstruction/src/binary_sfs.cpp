@@ -37,6 +37,8 @@ void BinarySfs::setSilhouettes(const ViewEvidence& e) {
 void BinarySfs::carve(const ProjectionTable& table, ProbabilityVolume* out) const {
   if (!out) throw std::invalid_argument("psfs::BinarySfs::carve: null output");
   const int C = table.numCameras();
+  if (table.footprintLevels() > 0)
+    throw std::invalid_argument("psfs::BinarySfs::carve: the table has footprint levels");
   if (static_cast<int>(silhouettes_.size()) != C)
     throw std::invalid_argument("psfs::BinarySfs::carve: " + std::to_string(silhouettes_.size()) +
                                 " silhouettes for " + std::to_string(C) + " cameras");

@@ -36,6 +36,20 @@ inline void checkInputs(const ProjectionTable& table, const ViewEvidence& eviden
     throw std::invalid_argument(who + ": multi-projection needs evidence set with bilinear = true");
 }
 
+// Footprint tables point into stacked evidence levels: only the footprint pSfS reads them, and
+// only from evidence with at least the table's levels.
+inline void checkFootprint(const ProjectionTable& table, const ViewEvidence& evidence, bool footprint,
+                           const std::string& who) {
+  const int tl = table.footprintLevels(), el = evidence.footprint().levels;
+  if (!footprint && tl > 0)
+    throw std::invalid_argument(who + ": the table has footprint levels (needs PsfsOptions::footprint)");
+  if (footprint && tl == 0)
+    throw std::invalid_argument(who + ": footprint fusion needs a table built with footprint_levels");
+  if (footprint && el < tl)
+    throw std::invalid_argument(who + ": footprint fusion needs evidence with " + std::to_string(tl) +
+                                " footprint levels (has " + std::to_string(el) + ")");
+}
+
 // The rows of a grid in parallel, dynamic chunks of `chunk` rows: fn(row, centres) with the
 // row's ProjectionTable::rowCentres (a per-thread scratch when the table projects on the fly).
 template <class Fn>

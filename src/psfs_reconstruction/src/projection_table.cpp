@@ -29,6 +29,12 @@ struct RowParams {
   float u_max, v_max;  // 16 * width, 16 * height
   uint32_t not_observed;
   int nx, nxp;
+  // Footprint levels: voxel x is at level #{j : lev_lo[j] <= x < lev_hi[j]}, added to the packed
+  // centre as that many lev_step (= (height + 1) rows). Integer bounds computed once per row in
+  // double, so every copy of the loop gives the same levels.
+  int nlev = 0;
+  int lev_lo[ProjectionTable::kMaxFootprintLevels - 1], lev_hi[ProjectionTable::kMaxFootprintLevels - 1];
+  uint32_t lev_step = 0;
 };
 
 // The row projection: full plumb_bob model in float (portable copy; the AVX2 copy below does
@@ -55,7 +61,9 @@ inline void projectRowBody(const RowParams& p, uint32_t* out) {
                    (V < p.v_max);
     const uint32_t pu = static_cast<uint32_t>(static_cast<int>(ok ? U : 0.0f));
     const uint32_t pv = static_cast<uint32_t>(static_cast<int>(ok ? V : 0.0f));
-    out[x] = ok ? (pu | (pv << 16)) : p.not_observed;
+    uint32_t level = 0;
+    for (int j = 0; j < p.nlev; ++j) level += (x >= p.lev_lo[j]) & (x < p.lev_hi[j]);
+    out[x] = ok ? (pu | (pv << 16)) + level * p.lev_step : p.not_observed;
   }
   for (int x = p.nx; x < p.nxp; ++x) out[x] = p.not_observed;
 }
@@ -98,7 +106,12 @@ __attribute__((target("avx2,fma"))) void projectRowAvx2(const RowParams& p, uint
     ok = _mm256_and_ps(ok, _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(p.nx), xi)));
     const __m256i pu = _mm256_cvttps_epi32(_mm256_and_ps(U, ok));
     const __m256i pv = _mm256_cvttps_epi32(_mm256_and_ps(V, ok));
-    const __m256i packed = _mm256_or_si256(pu, _mm256_slli_epi32(pv, 16));
+    __m256i packed = _mm256_or_si256(pu, _mm256_slli_epi32(pv, 16));
+    for (int j = 0; j < p.nlev; ++j) {
+      const __m256i in = _mm256_and_si256(_mm256_cmpgt_epi32(xi, _mm256_set1_epi32(p.lev_lo[j] - 1)),
+                                          _mm256_cmpgt_epi32(_mm256_set1_epi32(p.lev_hi[j]), xi));
+      packed = _mm256_add_epi32(packed, _mm256_and_si256(in, _mm256_set1_epi32(static_cast<int>(p.lev_step))));
+    }
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x0),
                         _mm256_blendv_epi8(sentinel, packed, _mm256_castps_si256(ok)));
   }
@@ -145,7 +158,12 @@ __attribute__((target("avx512f,avx2,fma"))) void projectRowAvx512(const RowParam
     ok &= _mm512_cmpgt_epi32_mask(_mm512_set1_epi32(p.nx), xi);  // padding lanes: not observed
     const __m512i pu = _mm512_cvttps_epi32(_mm512_maskz_mov_ps(ok, U));
     const __m512i pv = _mm512_cvttps_epi32(_mm512_maskz_mov_ps(ok, V));
-    const __m512i packed = _mm512_or_si512(pu, _mm512_slli_epi32(pv, 16));
+    __m512i packed = _mm512_or_si512(pu, _mm512_slli_epi32(pv, 16));
+    for (int j = 0; j < p.nlev; ++j) {
+      const __mmask16 in = _mm512_cmpgt_epi32_mask(xi, _mm512_set1_epi32(p.lev_lo[j] - 1)) &
+                           _mm512_cmpgt_epi32_mask(_mm512_set1_epi32(p.lev_hi[j]), xi);
+      packed = _mm512_mask_add_epi32(packed, in, packed, _mm512_set1_epi32(static_cast<int>(p.lev_step)));
+    }
     _mm512_mask_storeu_epi32(out + x0, store, _mm512_mask_blend_epi32(ok, sentinel, packed));
   }
 }
@@ -184,6 +202,7 @@ ProjectionTable::Camera ProjectionTable::prepareCamera(const tabletop_capture::C
   c.distorted = m.hasDistortion();
   c.width = m.width;
   c.height = m.height;
+  c.focal = std::sqrt(m.fx * m.fy);
   c.r2_max = FLT_MAX;
   if (c.distorted) {
     // The polynomial lens model is only valid near the image: far outside, barrel distortion
@@ -223,9 +242,19 @@ ProjectionTable::ProjectionTable(const VoxelGrid& grid,
   grid.validate();
   if (cameras.empty()) throw std::invalid_argument("psfs::ProjectionTable: no cameras");
   if (options.threads < 0) throw std::invalid_argument("psfs::ProjectionTable: threads < 0");
+  if (options.footprint_levels != 0) {
+    if (options.footprint_levels < 2 || options.footprint_levels > kMaxFootprintLevels)
+      throw std::invalid_argument("psfs::ProjectionTable: footprint_levels must be 0 or in 2.." +
+                                  std::to_string(kMaxFootprintLevels));
+    if (options.multi_projection)
+      throw std::invalid_argument("psfs::ProjectionTable: footprint_levels and multi_projection are exclusive");
+    if (!std::isfinite(options.footprint_scale) || !(options.footprint_scale > 0.0))
+      throw std::invalid_argument("psfs::ProjectionTable: footprint_scale must be > 0");
+  }
   grid_ = grid;
   for (size_t i = 0; i < cameras.size(); ++i)
     cameras_.push_back(prepareCamera(cameras[i], static_cast<int>(i)));
+  checkFootprintRows(cameras_);
   build();
 }
 
@@ -239,6 +268,7 @@ bool ProjectionTable::update(const VoxelGrid& grid,
   std::vector<Camera> prepared;
   for (size_t i = 0; i < cameras.size(); ++i)
     prepared.push_back(prepareCamera(cameras[i], static_cast<int>(i)));
+  checkFootprintRows(prepared);
   grid_ = grid;
   cameras_ = std::move(prepared);
   build();
@@ -253,6 +283,14 @@ size_t ProjectionTable::precomputedBytes(const VoxelGrid& grid, int num_cameras,
 
 size_t ProjectionTable::memoryBytes() const {
   return (centres_.size() + offsets_.size()) * sizeof(uint32_t);
+}
+
+void ProjectionTable::checkFootprintRows(const std::vector<Camera>& cams) const {
+  const int L = options_.footprint_levels;
+  for (size_t i = 0; i < cams.size() && L > 0; ++i)
+    if ((cams[i].height + 1) * L > (0xFFFF >> PackedUV::kFracBits))
+      badCamera(static_cast<int>(i), cams[i].model.name,
+                "image too high for " + std::to_string(L) + " footprint levels");
 }
 
 void ProjectionTable::build() {
@@ -304,6 +342,25 @@ void ProjectionTable::projectRow(const Camera& cam, int y, int z, uint32_t* out)
   p.not_observed = PackedUV::notObserved(cam.height);
   p.nx = grid_.dims.x();
   p.nxp = nxp_;
+  if (options_.footprint_levels > 0) {
+    // level >= j  <=>  round(scale * f s / Z) >= j  <=>  Z <= scale f s / (j - 1/2), with
+    // Z(x) = a_z + x b_z (camera frame); the x range where that holds, as integers.
+    p.nlev = options_.footprint_levels - 1;
+    p.lev_step = static_cast<uint32_t>(PackedUV::kOne * (cam.height + 1)) << 16;
+    for (int j = 1; j <= p.nlev; ++j) {
+      const double zj = options_.footprint_scale * cam.focal * grid_.voxel_size / (j - 0.5);
+      double lo = 0.0, hi = nxp_;  // [lo, hi)
+      if (b[2] > 0.0) {
+        hi = std::floor((zj - a[2]) / b[2]) + 1.0;
+      } else if (b[2] < 0.0) {
+        lo = std::ceil((zj - a[2]) / b[2]);
+      } else if (!(a[2] <= zj)) {
+        hi = 0.0;
+      }
+      p.lev_lo[j - 1] = static_cast<int>(std::clamp(lo, 0.0, double(nxp_)));
+      p.lev_hi[j - 1] = static_cast<int>(std::clamp(hi, 0.0, double(nxp_)));
+    }
+  }
 #if PSFS_HAVE_X86_DISPATCH
   if (avx512KernelsActive()) {
     projectRowAvx512(p, out);
@@ -375,10 +432,23 @@ const uint32_t* ProjectionTable::rowOffsets(size_t row, uint32_t* scratch) const
 
 uint32_t ProjectionTable::centre(int c, int x, int y, int z) const {
   const size_t row = static_cast<size_t>(y) + static_cast<size_t>(grid_.dims.y()) * z;
-  if (precomputed_) return centres_[row * centreScratchSize() + size_t(c) * nxp_ + x];
+  uint32_t packed;
+  if (precomputed_) {
+    packed = centres_[row * centreScratchSize() + size_t(c) * nxp_ + x];
+  } else {
+    std::vector<uint32_t> tmp(nxp_);
+    projectRow(cameras_[c], y, z, tmp.data());
+    packed = tmp[x];
+  }
+  return withoutLevel(c, packed);
+}
+
+int ProjectionTable::footprintLevel(int c, int x, int y, int z) const {
+  const size_t row = static_cast<size_t>(y) + static_cast<size_t>(grid_.dims.y()) * z;
+  if (precomputed_) return footprintLevelOf(c, centres_[row * centreScratchSize() + size_t(c) * nxp_ + x]);
   std::vector<uint32_t> tmp(nxp_);
   projectRow(cameras_[c], y, z, tmp.data());
-  return tmp[x];
+  return footprintLevelOf(c, tmp[x]);
 }
 
 }  // namespace psfs

@@ -59,12 +59,15 @@ PsfsFusion::PsfsFusion(const PsfsOptions& o) : options_(o) {
     throw std::invalid_argument("psfs::PsfsOptions: drop_threshold must be in [0, 1)");
   if (o.min_views < 1) throw std::invalid_argument("psfs::PsfsOptions: min_views must be >= 1");
   if (o.threads < 0) throw std::invalid_argument("psfs::PsfsOptions: threads must be >= 0");
+  if (o.footprint && o.multi_projection)
+    throw std::invalid_argument("psfs::PsfsOptions: footprint and multi_projection are exclusive");
 }
 
 void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence,
                       ProbabilityVolume* out) const {
   if (!out) throw std::invalid_argument("psfs::PsfsFusion::fuse: null output");
   detail::checkInputs(table, evidence, options_.multi_projection, "psfs::PsfsFusion::fuse");
+  detail::checkFootprint(table, evidence, options_.footprint, "psfs::PsfsFusion::fuse");
   const int C = table.numCameras();
   std::vector<detail::KernelView> views = detail::kernelViews(evidence);
 

@@ -52,6 +52,13 @@ void ReconstructorParams::validate() const {
   if (!(saturated_warning_fraction > 0 && saturated_warning_fraction <= 1))
     fail("saturated_warning_fraction must lie in (0, 1]");
   if (threads < 0) fail("threads must be >= 0");
+  if (hand.footprint) fail("hand.footprint is not supported (hand tables are projected on the fly)");
+  if (body.footprint != skin.footprint)
+    fail("body.footprint and skin.footprint must agree (one shared workspace table)");
+  for (const FootprintFilter* f : {&body_footprint, &skin_footprint})
+    if (f->levels < 2 || f->levels > ProjectionTable::kMaxFootprintLevels)
+      fail("footprint levels must lie in [2, 3]");
+  if (!(footprint_scale > 0 && std::isfinite(footprint_scale))) fail("footprint_scale must be > 0");
 }
 
 Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const ReconstructorParams& params)
@@ -159,6 +166,10 @@ void Reconstructor::adoptRig(const std::vector<tabletop_capture::CameraModel>& c
     ProjectionTableOptions o;
     o.multi_projection = params_.body.multi_projection || params_.skin.multi_projection;
     o.threads = params_.threads;
+    if (params_.body.footprint || params_.skin.footprint) {
+      o.footprint_levels = std::min(params_.body_footprint.levels, params_.skin_footprint.levels);
+      o.footprint_scale = params_.footprint_scale;
+    }
     if (!table_)
       table_ = std::make_unique<ProjectionTable>(grid, cameras_, o);
     else
@@ -266,8 +277,10 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
       skin_views[i].active = off;
     }
   }
-  body_evidence_.set(body_views, params_.body.multi_projection, params_.threads);
-  skin_evidence_.set(skin_views, params_.skin.multi_projection, params_.threads);
+  body_evidence_.set(body_views, params_.body.multi_projection, params_.threads,
+                     params_.body.footprint ? params_.body_footprint : FootprintFilter());
+  skin_evidence_.set(skin_views, params_.skin.multi_projection, params_.threads,
+                     params_.skin.footprint ? params_.skin_footprint : FootprintFilter());
   r.times.evidence = msSince(t0);
 
   // --- workspace volumes

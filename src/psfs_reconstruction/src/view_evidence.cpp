@@ -8,6 +8,7 @@
 #include <string>
 
 #include "cpu_dispatch.h"
+#include "footprint_filter.h"
 #include "psfs_reconstruction/projection_table.h"
 
 namespace psfs {
@@ -33,7 +34,16 @@ const std::array<int16_t, 256>& termTable() {
 int16_t ViewEvidence::logTerm(int byte) { return termTable()[std::clamp(byte, 0, 255)]; }
 
 void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int threads) {
+  set(views, bilinear, threads, FootprintFilter());
+}
+
+void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int threads,
+                       const FootprintFilter& footprint) {
   if (views.empty()) throw std::invalid_argument("psfs::ViewEvidence: no views");
+  const int L = footprint.levels;
+  if (L != 0 && (L < 2 || L > ProjectionTable::kMaxFootprintLevels))
+    throw std::invalid_argument("psfs::ViewEvidence: footprint levels must be 0 or in 2.." +
+                                std::to_string(ProjectionTable::kMaxFootprintLevels));
   if (threads < 0) throw std::invalid_argument("psfs::ViewEvidence: threads < 0");
   for (size_t i = 0; i < views.size(); ++i) {
     const ViewImage& v = views[i];
@@ -47,8 +57,11 @@ void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int t
       badView(i, "image must be 2-D with sides <= " + std::to_string(PackedUV::kMaxImageSide));
     if (!v.active.empty() && (v.active.type() != CV_8UC1 || v.active.size() != v.likelihood.size()))
       badView(i, "active mask must be CV_8UC1 of the likelihood image's size");
+    if ((v.likelihood.rows + 1) * L > (0xFFFF >> PackedUV::kFracBits))
+      badView(i, "image too high for " + std::to_string(L) + " footprint levels");
   }
   bilinear_ = bilinear;
+  footprint_ = footprint;
   views_.resize(views.size());
   const auto& lut = termTable();
   const int n = static_cast<int>(views.size());
@@ -60,12 +73,13 @@ void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int t
     out.width = W;
     out.height = H;
     const size_t np = size_t(W) * H;
-    out.terms.resize(np + 3);
+    const size_t level_size = size_t(W) * (H + 1);  // a level and its guard row
+    const int levels = std::max(L, 1);
+    out.terms.resize(level_size * (levels - 1) + np + 3);
     out.likelihood.resize(np + 4);
     out.inactive_pixels = in.active.empty() ? 0 : np - static_cast<size_t>(cv::countNonZero(in.active));
     for (int v = 0; v < H; ++v) {
       const uint8_t* src = in.likelihood.ptr<uint8_t>(v) + in.channel;
-      const uint8_t* act = in.active.empty() ? nullptr : in.active.ptr<uint8_t>(v);
       uint8_t* lk = &out.likelihood[size_t(v) * W];
       int16_t* tm = &out.terms[size_t(v) * W];
       if (ch == 1)
@@ -73,11 +87,28 @@ void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int t
       else
         for (int u = 0; u < W; ++u) lk[u] = src[size_t(u) * ch];
       for (int u = 0; u < W; ++u) tm[u] = lut[lk[u]];
-      if (act)
-        for (int u = 0; u < W; ++u) tm[u] = act[u] == 0 ? kNoEvidence : tm[u];
     }
-    std::fill(out.terms.begin() + np, out.terms.end(), kNoEvidence);
     std::fill(out.likelihood.begin() + np, out.likelihood.end(), 0);
+    // Footprint levels from the unmasked level 0, then the mask on every level.
+    thread_local detail::FootprintScratch scratch;
+    for (int l = 1; l < levels; ++l) {
+      int16_t* dst = &out.terms[level_size * l];
+      if (footprint.statistic == FootprintStatistic::kMedian)
+        detail::medianFilterTerms(out.terms.data(), W, H, l, dst, &scratch);
+      else
+        detail::meanFilterTerms(out.likelihood.data(), W, H, l, lut.data(), dst, &scratch);
+    }
+    for (int l = 0; l < levels; ++l) {
+      int16_t* level = &out.terms[level_size * l];
+      if (!in.active.empty())
+        for (int v = 0; v < H; ++v) {
+          const uint8_t* act = in.active.ptr<uint8_t>(v);
+          int16_t* tm = level + size_t(v) * W;
+          for (int u = 0; u < W; ++u) tm[u] = act[u] == 0 ? kNoEvidence : tm[u];
+        }
+      // Guard row (the last level's guard is the plain layout's guard pixel plus 3 entries).
+      std::fill(level + np, level + (l + 1 < levels ? level_size : np + 3), kNoEvidence);
+    }
     if (!bilinear) {
       out.pairs.clear();
       continue;

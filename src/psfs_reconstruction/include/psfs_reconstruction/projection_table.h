@@ -17,6 +17,12 @@
 // sampled once, at A's centre + A's offset when A's centre projects into camera c's image, else
 // at B's centre - B's offset (see psfs_kernels.h). So a voxel costs 3 bilinear lookups per
 // camera, not 6.
+//
+// Footprint levels (issue 17 prototype, off by default): instead of sampling the voxel's
+// footprint per voxel, the evidence images are filtered to footprints of a few sizes once per
+// frame (ViewEvidence, FootprintFilter), stacked one above the other, and each voxel's packed
+// centre points into the level that matches its projected width. Then fusion is the
+// single-projection kernel: one lookup per voxel and camera. See footprintLevelOf().
 #pragma once
 
 #include <cstdint>
@@ -81,6 +87,15 @@ enum class TableStorage {
 
 struct ProjectionTableOptions {
   bool multi_projection = false;   // also provide the 6 sample offsets per voxel
+  // Footprint levels (prototype, see the file comment): 0 = off (plain centres). L in
+  // [2, kMaxFootprintLevels]: voxel centres point into level l of L stacked evidence images, l =
+  // the voxel's footprint radius round(footprint_scale * w) clamped to L - 1, w = f s / Z the
+  // voxel's projected width in pixels (f = sqrt(fx fy), s the voxel edge, Z its depth in the
+  // camera; lens distortion and obliqueness are ignored). Level l is read from an image filtered
+  // over (2l + 1)^2 pixels. Exclusive with multi_projection; only PsfsFusion with
+  // PsfsOptions::footprint reads such a table. Needs (height + 1) * L <= 4095 per camera.
+  int footprint_levels = 0;
+  double footprint_scale = 0.7;
   TableStorage storage = TableStorage::kAuto;
   size_t auto_max_bytes = size_t(128) << 20;
   int threads = 0;                 // OpenMP threads for building (0 = OpenMP default)
@@ -94,6 +109,7 @@ class ProjectionTable {
   // samples anyway (the default rig's 16 mm voxels are at most 4.5 px wide).
   static constexpr int kMaxSampleOffsetPx = 7;
   static constexpr int kChunk = 8;  // voxels per chunk along x (one AVX2 vector of int32)
+  static constexpr int kMaxFootprintLevels = 3;  // windows 1, 3 and 5 px
 
   ProjectionTable() = default;
   // Validates grid and cameras (throws std::invalid_argument naming the camera and the field:
@@ -112,6 +128,12 @@ class ProjectionTable {
   const tabletop_capture::CameraModel& camera(int c) const { return cameras_[c].model; }
   bool precomputed() const { return precomputed_; }
   bool multiProjection() const { return options_.multi_projection; }
+  int footprintLevels() const { return options_.footprint_levels; }
+  // Level of a packed centre of camera c in a footprint table (0 in a plain one). The packed v of
+  // level l is offset by l * (height + 1) rows: evidence level l starts at row l * (height + 1).
+  int footprintLevelOf(int c, uint32_t packed) const {
+    return static_cast<int>(packed >> (16 + PackedUV::kFracBits)) / (cameras_[c].height + 1);
+  }
   size_t memoryBytes() const;  // stored projections (0 when on the fly)
   // What a precomputed table of this grid and these options would take.
   static size_t precomputedBytes(const VoxelGrid& grid, int num_cameras, bool multi_projection);
@@ -130,8 +152,16 @@ class ProjectionTable {
   // (voxel centre to face centre), clamped to kMaxSampleOffsetPx.
   const uint32_t* rowOffsets(size_t row, uint32_t* scratch) const;
 
-  // Scalar access for tests and reference code: packed centre of voxel (x, y, z) in camera c.
+  // Scalar access for tests and reference code: packed centre of voxel (x, y, z) in camera c
+  // (the image position: without the footprint level, see footprintLevel()).
   uint32_t centre(int c, int x, int y, int z) const;
+  // Footprint level of voxel (x, y, z) in camera c (0 in a plain table).
+  int footprintLevel(int c, int x, int y, int z) const;
+  // A packed centre of camera c as rowCentres gives it, without its footprint level.
+  uint32_t withoutLevel(int c, uint32_t packed) const {
+    const uint32_t level = static_cast<uint32_t>(footprintLevelOf(c, packed));
+    return packed - ((level * static_cast<uint32_t>(PackedUV::kOne * (cameras_[c].height + 1))) << 16);
+  }
 
  private:
   struct Camera {
@@ -143,8 +173,10 @@ class ProjectionTable {
     bool distorted;
     float r2_max;          // valid range of the lens model (squared normalised radius)
     int width, height;
+    double focal;          // sqrt(fx fy), for the footprint levels
   };
   void build();
+  void checkFootprintRows(const std::vector<Camera>& cams) const;
   void projectRow(const Camera& cam, int y, int z, uint32_t* out) const;
   void sampleOffsets(const Camera& cam, int y, int z, uint32_t* out) const;
   static Camera prepareCamera(const tabletop_capture::CameraModel& m, int index);

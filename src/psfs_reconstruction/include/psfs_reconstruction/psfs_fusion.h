@@ -26,6 +26,11 @@
 // face is sampled once (ProjectionTable): 3 lookups per voxel and camera instead of 6, for the
 // 64x64x48 volume's 2 ms target on 2 cores (see docs/benchmarks.md (bench_fusion)).
 // On the simulated rig the hull quality is unchanged within +-0.01 IoU.
+// Footprint-filtered evidence (PsfsOptions::footprint, issue 17 prototype, off by default):
+// the footprint statistic comes from evidence images filtered once per frame (ViewEvidence,
+// FootprintFilter) and a table that points each voxel at the window of its projected size
+// (ProjectionTableOptions::footprint_levels), so fusion is the single-projection kernel, one
+// lookup per voxel and camera; docs/benchmarks.md has its cost and quality.
 //
 // Implementation: log domain in 1/1024 fixed point, so the product over cameras is an integer
 // sum. The uint8 -> log-term table is applied once per pixel and frame (ViewEvidence), so the
@@ -80,6 +85,11 @@ struct PsfsOptions {
   double drop_threshold = 0.0;  // 0 = threshold
   int min_views = 2;            // >= 1
   bool multi_projection = false;   // needs a table and evidence built for it
+  // Footprint-filtered evidence (issue 17 prototype; exclusive with multi_projection): the
+  // single-projection kernel reads, per voxel and camera, the evidence filtered over a window
+  // matched to the voxel's projected size. Needs a table built with footprint_levels and
+  // evidence set with a FootprintFilter of at least as many levels.
+  bool footprint = false;
   bool zero_outside_hull = false;  // store 0 instead of the posterior where p <= t
   int threads = 0;                 // OpenMP threads (0 = OpenMP default)
 };

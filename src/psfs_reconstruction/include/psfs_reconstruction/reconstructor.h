@@ -58,6 +58,13 @@ struct ReconstructorParams {
   PsfsOptions body = defaultBody();
   PsfsOptions skin = defaultSkin();
   PsfsOptions hand = defaultHand();
+  // Footprint-filtered evidence (issue 17 prototype, used only where body.footprint and
+  // skin.footprint are set; both or neither, since they share one table): the filters of each class
+  // and the workspace table's level choice (ProjectionTableOptions::footprint_scale). Hand
+  // sub-volumes always read level 0, the plain terms.
+  FootprintFilter body_footprint{3, FootprintStatistic::kMedian};
+  FootprintFilter skin_footprint{3, FootprintStatistic::kMean};
+  double footprint_scale = 0.7;
   // Hand sub-volumes: cubes of hand_roi_edge metres with hand_roi_voxels per side around each
   // requested ROI centre, snapped to a world lattice (0.30 m / 83 = 3.6 mm voxels, thesis 4.3).
   double hand_roi_edge = 0.30;

@@ -13,6 +13,12 @@
 //    (what the thesis got from the GPU's texture unit). Two bytes per pixel rather than a
 //    packed 2x2 quad per pixel keeps the 8 views' images (1.4 MB) near the core's L2.
 //  * likelihood: the plain bytes, for the reference variants (all-classes, binary SfS).
+//  * footprint levels (FootprintFilter, issue 17 prototype, off by default): terms holds L term
+//    images one above the other, level l at row l * (height + 1) (each followed by a guard row
+//    of "no evidence"): level 0 the plain terms, level l the terms of the likelihood filtered
+//    over a (2l + 1)^2 window. A projection table built with footprint levels points each voxel
+//    at the level of its projected size, so the single-projection kernel reads the footprint's
+//    statistic with one lookup (see ProjectionTableOptions::footprint_levels).
 #pragma once
 
 #include <cstdint>
@@ -33,6 +39,20 @@ struct ViewImage {
   cv::Mat active;
 };
 
+// Footprint statistic over a (2l + 1)^2 window, replicated border. Both are exact integer
+// arithmetic (every instruction-set clone gives the same bytes):
+//  * kMedian: separable median (the median of the 2l + 1 row medians: a close, much cheaper
+//    stand-in for the 2-D median), taken on the log terms directly (the median commutes with
+//    the monotone byte -> term map, so no second table lookup per pixel and level);
+//  * kMean: box mean of the likelihood bytes, rounded to the nearest byte, then the term.
+// The active mask is applied after filtering, at each level's centre pixel (the face samples
+// of the multi-projection test ignore it the same way).
+enum class FootprintStatistic { kMedian, kMean };
+struct FootprintFilter {
+  int levels = 0;  // 0 = no footprint levels; else 2..3 (must cover the table's)
+  FootprintStatistic statistic = FootprintStatistic::kMedian;
+};
+
 class ViewEvidence {
  public:
   static constexpr int kLogScale = 1024;   // fixed-point scale of the log terms
@@ -44,14 +64,20 @@ class ViewEvidence {
   // Throws std::invalid_argument naming the view and the problem (empty image, not 8-bit,
   // channel out of range, mask of another size or type, side above PackedUV::kMaxImageSide = 4080 px).
   void set(const std::vector<ViewImage>& views, bool bilinear, int threads = 0);
+  // The same, with footprint levels (throws std::invalid_argument if footprint.levels is not
+  // 0 or 2..3, or an image is too high for them: (height + 1) * levels <= 4095).
+  void set(const std::vector<ViewImage>& views, bool bilinear, int threads,
+           const FootprintFilter& footprint);
 
   int numViews() const { return static_cast<int>(views_.size()); }
   int width(int v) const { return views_[v].width; }
   int height(int v) const { return views_[v].height; }
   bool bilinear() const { return bilinear_; }
+  const FootprintFilter& footprint() const { return footprint_; }
 
   // Kernel access. terms/likelihood have width*height + 1 entries (the last is the guard) and
-  // are readable 4 bytes past it (gathers load 32 bits).
+  // are readable 4 bytes past it (gathers load 32 bits). With footprint levels, terms has
+  // levels * (height + 1) rows (see the file comment), also readable 4 bytes past the end.
   const int16_t* terms(int v) const { return views_[v].terms.data(); }
   const uint8_t* likelihood(int v) const { return views_[v].likelihood.data(); }
   // pairs[(v + kQuadPad) * quadStride + u + kQuadPad] = L(u, v) | L(u, v + 1) << 8, with u, v
@@ -77,6 +103,7 @@ class ViewEvidence {
   };
   std::vector<View> views_;
   bool bilinear_ = false;
+  FootprintFilter footprint_;
 };
 
 }  // namespace psfs
