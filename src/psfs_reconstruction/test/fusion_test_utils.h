@@ -167,5 +167,34 @@ inline cv::Mat classifierLikelihood(const cv::Mat& mask, bool noise, uint32_t se
   return out;
 }
 
+// IoU of the voxels above byte threshold `tb` with an oracle's occupancy (nonzero = inside).
+inline double occupancyIoU(const ProbabilityVolume& v, uint8_t tb, const std::vector<uint8_t>& truth) {
+  size_t inter = 0, uni = 0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    const bool a = v.data[i] > tb, b = truth[i] != 0;
+    inter += a && b;
+    uni += a || b;
+  }
+  return uni ? double(inter) / uni : 1.0;
+}
+
+// The kernels' comparison scene: two spheres seen by every camera with classifier-like noise,
+// and a switched-off rectangle in camera 2 (the active-mask path).
+inline std::vector<ViewImage> twoSpheresWithMaskedView(const std::vector<tabletop_capture::CameraModel>& cams) {
+  const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2},
+                                       {Eigen::Vector3d(0.2, 0.1, 0.5), 0.08}};
+  std::vector<ViewImage> views;
+  for (size_t c = 0; c < cams.size(); ++c) {
+    ViewImage v;
+    v.likelihood = noisy(sphereLikelihood(cams[c], spheres), 40, 0.05, static_cast<uint32_t>(7 + c));
+    if (c == 2) {
+      v.active = cv::Mat(cams[c].height, cams[c].width, CV_8UC1, cv::Scalar(1));
+      v.active(cv::Rect(100, 50, 80, 120)).setTo(0);
+    }
+    views.push_back(v);
+  }
+  return views;
+}
+
 }  // namespace test
 }  // namespace psfs

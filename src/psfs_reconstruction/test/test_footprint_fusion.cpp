@@ -33,16 +33,6 @@ namespace {
 
 namespace sim = tabletop_sim;
 
-double iou(const ProbabilityVolume& v, uint8_t tb, const std::vector<uint8_t>& truth) {
-  size_t inter = 0, uni = 0;
-  for (size_t i = 0; i < truth.size(); ++i) {
-    const bool a = v.data[i] > tb, b = truth[i] != 0;
-    inter += a && b;
-    uni += a || b;
-  }
-  return uni ? double(inter) / uni : 1.0;
-}
-
 cv::Mat randomImage(int w, int h, uint32_t seed) {
   cv::Mat m(h, w, CV_8UC1);
   cv::randu(m, cv::Scalar(0), cv::Scalar(256));
@@ -182,18 +172,7 @@ TEST(FootprintTable, LevelsFollowTheProjectedVoxelSize) {
 TEST(FootprintFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
   if (!avx2Available()) GTEST_SKIP() << "no AVX2 on this CPU: only the scalar kernels exist";
   const auto rig = tabletop_capture::makeDefaultRig();
-  const std::vector<test::Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2},
-                                             {Eigen::Vector3d(0.2, 0.1, 0.5), 0.08}};
-  std::vector<ViewImage> views;
-  for (size_t c = 0; c < rig.cameras.size(); ++c) {
-    ViewImage v;
-    v.likelihood = test::noisy(test::sphereLikelihood(rig.cameras[c], spheres), 40, 0.05, 7 + c);
-    if (c == 2) {
-      v.active = cv::Mat(240, 320, CV_8UC1, cv::Scalar(1));
-      v.active(cv::Rect(100, 50, 80, 120)).setTo(0);
-    }
-    views.push_back(v);
-  }
+  std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
   const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm), cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
   for (const VoxelGrid& grid : grids)
     for (FootprintStatistic stat : {FootprintStatistic::kMedian, FootprintStatistic::kMean})
@@ -314,8 +293,8 @@ TEST(FootprintFusion, SimRigIoUWithinTheMultiProjection) {
         ProbabilityVolume m, p;
         PsfsFusion(om).fuse(multi_table, mev, &m);
         PsfsFusion(of).fuse(fp_table, fev, &p);
-        sum[key + " multi"] += iou(m, thresholdByte(o.threshold), cls ? skin : person) / frames.size();
-        sum[key + " footprint"] += iou(p, thresholdByte(o.threshold), cls ? skin : person) / frames.size();
+        sum[key + " multi"] += test::occupancyIoU(m, thresholdByte(o.threshold), cls ? skin : person) / frames.size();
+        sum[key + " footprint"] += test::occupancyIoU(p, thresholdByte(o.threshold), cls ? skin : person) / frames.size();
       }
   }
   std::printf("simulated rig, 'wave' frames %d %d %d, 16 mm, mean IoU vs oracle (multi-projection | footprint levels):\n",
@@ -354,8 +333,8 @@ TEST(FootprintFusion, PipelineIoUWithinTheMultiProjection) {
       std::vector<uint8_t> person, sk;
       const VoxelGrid& g = res.body.grid;
       rig.oracle(f).sampleGrid(g.origin, g.voxel_size, g.dims, &person, &sk);
-      body[footprint] += iou(res.body, thresholdByte(params.body.threshold), person) / frames.size();
-      skin[footprint] += iou(res.skin, thresholdByte(params.skin.threshold), sk) / frames.size();
+      body[footprint] += test::occupancyIoU(res.body, thresholdByte(params.body.threshold), person) / frames.size();
+      skin[footprint] += test::occupancyIoU(res.skin, thresholdByte(params.skin.threshold), sk) / frames.size();
     }
   }
   std::printf("[ figures  ] pipeline, 4 frames: body IoU %.4f multi-projection | %.4f footprint (%+.4f), "

@@ -30,16 +30,6 @@ Truth oracleVolumes(const sim::Oracle& oracle, const VoxelGrid& g) {
   return t;
 }
 
-double iou(const ProbabilityVolume& v, uint8_t tb, const std::vector<uint8_t>& truth) {
-  size_t inter = 0, uni = 0;
-  for (size_t i = 0; i < truth.size(); ++i) {
-    const bool a = v.data[i] > tb, b = truth[i] != 0;
-    inter += a && b;
-    uni += a || b;
-  }
-  return uni ? double(inter) / uni : 1.0;
-}
-
 // CV_8UC2 likelihood images as the classifier delivers them: channel 0 body, 1 skin.
 cv::Mat likelihoods(const cv::Mat& person, const cv::Mat& skin, bool noise, uint32_t seed) {
   cv::Mat out;
@@ -99,8 +89,8 @@ TEST(FusionSim, VolumesAgainstTheOccupancyOracle) {
           const auto& t = cls == 0 ? truth.person : truth.skin;
           const std::string key = std::string(cfg.res == Resolution::k16mm ? "16mm" : " 8mm") +
                                   (cls == 0 ? " body" : " skin") + (noise ? " noisy" : " clean");
-          sum[key + " pSfS"] += iou(p, thresholdByte(o.threshold), t);
-          sum[key + " binary"] += iou(b, 0, t);
+          sum[key + " pSfS"] += test::occupancyIoU(p, thresholdByte(o.threshold), t);
+          sum[key + " binary"] += test::occupancyIoU(b, 0, t);
         }
       }
     }

@@ -25,18 +25,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
     GTEST_SKIP() << "no AVX2 on this CPU: only the scalar kernels exist";
   }
   const auto rig = tabletop_capture::makeDefaultRig();
-  const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2},
-                                       {Eigen::Vector3d(0.2, 0.1, 0.5), 0.08}};
-  std::vector<ViewImage> views;
-  for (size_t c = 0; c < rig.cameras.size(); ++c) {
-    ViewImage v;
-    v.likelihood = test::noisy(test::sphereLikelihood(rig.cameras[c], spheres), 40, 0.05, 7 + c);
-    if (c == 2) {
-      v.active = cv::Mat(240, 320, CV_8UC1, cv::Scalar(1));
-      v.active(cv::Rect(100, 50, 80, 120)).setTo(0);
-    }
-    views.push_back(v);
-  }
+  std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
   // Camera 1 zoomed in: it sees only part of the grid, so rows, columns and layers switch
   // between observed and unobserved voxels (the face kernels' fallbacks).
   auto cams = rig.cameras;
