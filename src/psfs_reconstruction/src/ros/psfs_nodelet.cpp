@@ -270,7 +270,9 @@ class PsfsNodelet : public nodelet::Nodelet {
   }
 
   // dynamic_reconfigure thread: checked here (a refused value never reaches the worker), applied
-  // by the worker before its next set, so that a set is fused with one set of thresholds.
+  // by the worker before its next set, so that a set is fused with one set of thresholds. cfg_
+  // keeps the values read at start (only read after onInit); the thresholds in force are the
+  // reconstructor's.
   void onTuning(const psfs_reconstruction::PsfsTuningConfig& c) {
     PsfsOptions o = cfg_.params.body;
     for (const double t : {c.body_threshold, c.skin_threshold, c.hand_threshold}) {
@@ -297,9 +299,6 @@ class PsfsNodelet : public nodelet::Nodelet {
       NODELET_WARN("psfs: live tuning not applied: %s", e.what());
       return;
     }
-    cfg_.params.body.threshold = (*t)[0];
-    cfg_.params.skin.threshold = (*t)[1];
-    cfg_.params.hand.threshold = (*t)[2];
     NODELET_INFO("psfs: live tuning: thresholds body %.3f, skin %.3f, hand %.3f from the next set",
                  (*t)[0], (*t)[1], (*t)[2]);
   }
@@ -516,12 +515,12 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
     if (cfg_.nodelet.publish_clouds && body_cloud_pub_.getNumSubscribers() > 0) {
       auto c = boost::make_shared<sensor_msgs::PointCloud2>();
-      toCloudMsg(r.body, thresholdByte(cfg_.params.body.threshold), stamp, world_frame_, c.get());
+      toCloudMsg(r.body, thresholdByte(recon_->params().body.threshold), stamp, world_frame_, c.get());
       body_cloud_pub_.publish(c);
     }
     if (cfg_.nodelet.publish_clouds && skin_cloud_pub_.getNumSubscribers() > 0) {
       auto c = boost::make_shared<sensor_msgs::PointCloud2>();
-      toCloudMsg(r.skin, thresholdByte(cfg_.params.skin.threshold), stamp, world_frame_, c.get());
+      toCloudMsg(r.skin, thresholdByte(recon_->params().skin.threshold), stamp, world_frame_, c.get());
       skin_cloud_pub_.publish(c);
     }
   }

@@ -105,17 +105,20 @@ class FrameSetAssembler {
  public:
   // Throws std::invalid_argument for num_cameras < 1, negative/NaN tolerance or timeout,
   // max_pending < 1.
-  explicit FrameSetAssembler(const FrameSetAssemblerConfig& config) : config_(config) {
-    if (config_.num_cameras < 1)
-      throw std::invalid_argument("FrameSetAssembler: num_cameras must be >= 1, got " +
-                                  std::to_string(config_.num_cameras));
-    if (!(config_.tolerance >= 0.0) || !std::isfinite(config_.tolerance))
-      throw std::invalid_argument("FrameSetAssembler: tolerance must be finite and >= 0");
-    if (!(config_.timeout >= 0.0))
-      throw std::invalid_argument("FrameSetAssembler: timeout must be >= 0");
-    if (config_.max_pending < 1)
-      throw std::invalid_argument("FrameSetAssembler: max_pending must be >= 1");
+  explicit FrameSetAssembler(const FrameSetAssemblerConfig& config) : config_((validate(config), config)) {
     counters_.missing_per_camera.assign(config_.num_cameras, 0);
+  }
+
+  static void validate(const FrameSetAssemblerConfig& c) {
+    if (c.num_cameras < 1)
+      throw std::invalid_argument("FrameSetAssembler: num_cameras must be >= 1, got " +
+                                  std::to_string(c.num_cameras));
+    if (!(c.tolerance >= 0.0) || !std::isfinite(c.tolerance))
+      throw std::invalid_argument("FrameSetAssembler: tolerance must be finite and >= 0");
+    if (!(c.timeout >= 0.0))
+      throw std::invalid_argument("FrameSetAssembler: timeout must be >= 0");
+    if (c.max_pending < 1)
+      throw std::invalid_argument("FrameSetAssembler: max_pending must be >= 1");
   }
 
   AddResult add(int camera, double stamp, T payload) {
@@ -195,7 +198,7 @@ class FrameSetAssembler {
     FrameSetAssemblerConfig c = config_;
     c.tolerance = tolerance;
     c.timeout = timeout;
-    FrameSetAssembler<T> check(c);
+    validate(c);
     config_ = c;
   }
 
