@@ -15,6 +15,7 @@ namespace {
 }
 
 void validate(const SimOptions& o) {
+  if (o.scenario != "default") bad("unknown scenario '" + o.scenario + "'");
   if (!(o.fps > 0.0) || !std::isfinite(o.fps)) bad("fps must be a finite value > 0");
   if (o.empty_frames < 0) bad("empty_frames must be >= 0");
   if (!(o.noise_sigma >= 0.0) || !std::isfinite(o.noise_sigma))
@@ -101,6 +102,7 @@ GroundTruth SimulatedRig::truth(int frame) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (!personPresent(frame)) {
     g.left_hand = g.right_hand = g.head = Eigen::Vector3d::Constant(nan);
+    g.left_hand_skin = g.right_hand_skin = g.left_hand;
     g.body_state.fill(nan);
     return g;
   }
@@ -109,6 +111,8 @@ GroundTruth SimulatedRig::truth(int frame) const {
   g.person_present = true;
   g.left_hand = handCentroid(prims, Side::LEFT);
   g.right_hand = handCentroid(prims, Side::RIGHT);
+  g.left_hand_skin = g.left_hand;  // placeholder until the scenario generator's cuffs land
+  g.right_hand_skin = g.right_hand;
   g.head = body_.headCentre(p);
   const Eigen::AlignedBox3d ws(options_.workspace_min,
                                options_.workspace_min + options_.workspace_size);

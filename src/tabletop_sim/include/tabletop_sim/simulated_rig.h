@@ -22,6 +22,12 @@
 namespace tabletop_sim {
 
 struct SimOptions {
+  // The world and sensors: "default" (the office, person and 8-camera ring of DESIGN.md), a
+  // preset name, or "random-<seed>" (scenario.h). Any other than "default" replaces the
+  // camera count and size, noise_sigma and short_sleeves below; script, fps, empty_frames,
+  // seed, bayer, threads and masks still apply. A rig given to the constructor keeps its
+  // cameras.
+  std::string scenario = "default";
   // Default rig only (ignored when a rig is given): camera count 1..16, image size >= 16.
   int num_cameras = 8, width = 320, height = 240;
   bool distortion = true;
@@ -42,9 +48,12 @@ struct SimOptions {
 
 struct GroundTruth {
   bool person_present = false;
-  // Hand centroids and head centre (world, m; definitions in body_model.h). NaN when no
-  // person is present.
+  // Hand centroids (palm + fingers, the body model's hand) and head centre (world, m;
+  // definitions in body_model.h). NaN when no person is present.
   Eigen::Vector3d left_hand, right_hand, head;
+  // The MPF's hand target (DESIGN.md section 5): the centroid of the hand's VISIBLE skin, the
+  // palm and finger solid not covered by a sleeve or cuff. NaN when none of it is visible.
+  Eigen::Vector3d left_hand_skin, right_hand_skin;
   bool left_hand_in_workspace = false, right_hand_in_workspace = false, head_in_workspace = false;
   std::array<double, 18> body_state{};  // tabletop_msgs/BodyPose.state order; NaN if absent
   std::array<HandShape, 2> hand_shapes{{HandShape::OPEN, HandShape::OPEN}};  // by Side
