@@ -16,6 +16,9 @@ Usage: scripts/demo.sh [options] [extra roslaunch arg:=value ...]
                     head_turn, static (default all)
   --seed N          seed of the sensor noise (default 1)
   --bayer ENC       publish Bayer images (e.g. bayer_rggb8) instead of rgb8
+  --scenario NAME   world and sensors: default, a preset (dark_skin, pale_skin, skin_sleeves,
+                    cuffs, short_sleeves, four_cameras, vga, lights_on, flicker, clutter,
+                    occluder, low_light) or random-SEED, e.g. random-7 (default: default)
   --short-sleeves   bare forearms
   --participants N  1, or 2: a second simulated rig (script reach_targets, seed 2) joins the CVE room
   --port N          port of the CVE room server and its browser client (default 8765)
@@ -53,6 +56,7 @@ while [ $# -gt 0 ]; do
     --seed) EXTRA+=("seed:=$2"); shift 2 ;;
     --bayer) EXTRA+=("bayer:=$2"); shift 2 ;;
     --short-sleeves) EXTRA+=("short_sleeves:=true"); shift ;;
+    --scenario) EXTRA+=("scenario:=$2"); shift 2 ;;
     --participants) PARTICIPANTS="$2"; EXTRA+=("participants:=$2"); shift 2 ;;
     --browser) BROWSER=true; shift ;;
     --port) PORT="$2"; shift 2 ;;

@@ -160,6 +160,26 @@ double BackgroundModel::changedFraction(const cv::Mat& rgb) const {
   constexpr float kMinChromaIntensity = 40.0f;
   auto var = [n](double s, double s2) { return sampleVariance(s, s2, n); };
   std::vector<float> r(width_), g(width_), in(width_);
+  // This camera's sensor noise, from the frame itself: the median absolute intensity
+  // difference to the learned mean is noise-dominated while less than half of the image
+  // changed (a person fills 5-40 %). With one or a few learned frames the per-pixel spread
+  // says nothing yet, and fixed floors suit only the noise they were tuned for: here a
+  // noisier or darker camera (vignetting) would see "changes" in every frame and never learn.
+  std::vector<float> residual(std::size_t(width_) * height_);
+  for (int y = 0; y < height_; ++y) {
+    kernels::rgbRowToRgI(rgb.ptr<std::uint8_t>(y), width_, r.data(), g.data(), in.data());
+    const std::size_t o = std::size_t(y) * width_;
+    for (int x = 0; x < width_; ++x) residual[o + x] = std::abs(in[x] - float(sum_[2][o + x] / n));
+  }
+  auto mid = residual.begin() + residual.size() / 2;
+  std::nth_element(residual.begin(), mid, residual.end());
+  // 1.4826 MAD = sigma of a normal; the difference to a mean of n frames has (1 + 1/n) times
+  // the variance of one frame, so the estimate below is one frame's intensity noise.
+  const double noise_i2 = std::pow(1.4826 * double(*mid), 2) / (1.0 + 1.0 / n);
+  // Per pixel, the variance of (frame - mean of n): the noise (learned spread, at least the
+  // camera's noise and twice the floors) times (1 + 1/n). rg noise from intensity noise:
+  // r = R / 3I moves by about 0.47 sigma_I / I for a grey pixel.
+  const double spread = 1.0 + 1.0 / n;
   std::size_t changed = 0;
   for (int y = 0; y < height_; ++y) {
     kernels::rgbRowToRgI(rgb.ptr<std::uint8_t>(y), width_, r.data(), g.data(), in.data());
@@ -167,11 +187,13 @@ double BackgroundModel::changedFraction(const cv::Mat& rgb) const {
     for (int x = 0; x < width_; ++x) {
       const std::size_t i = o + x;
       const double mi = sum_[2][i] / n, di = in[x] - mi;
-      bool c = di * di > k2 * std::max(floor_i2, var(sum_[2][i], sum_[5][i]));
+      bool c = di * di >
+               k2 * spread * std::max({floor_i2, noise_i2, var(sum_[2][i], sum_[5][i])});
       if (!c && in[x] >= kMinChromaIntensity && mi >= kMinChromaIntensity) {
         const double dr = r[x] - sum_[0][i] / n, dg = g[x] - sum_[1][i] / n;
-        c = dr * dr > k2 * std::max(floor_rg2, var(sum_[0][i], sum_[3][i])) ||
-            dg * dg > k2 * std::max(floor_rg2, var(sum_[1][i], sum_[4][i]));
+        const double noise_rg2 = 0.22 * noise_i2 / (mi * mi);
+        c = dr * dr > k2 * spread * std::max({floor_rg2, noise_rg2, var(sum_[0][i], sum_[3][i])}) ||
+            dg * dg > k2 * spread * std::max({floor_rg2, noise_rg2, var(sum_[1][i], sum_[4][i])});
       }
       changed += c;
     }

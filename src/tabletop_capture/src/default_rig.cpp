@@ -19,6 +19,23 @@ Eigen::Isometry3d lookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& t
   return T;
 }
 
+double focalToFit(const CameraModel& cam, const Eigen::AlignedBox3d& box, double margin,
+                  double aspect) {
+  double f = 1e9;
+  const Eigen::Isometry3d camera_T_world = cam.world_T_camera.inverse();
+  const double room_x = std::min(cam.cx, cam.width - 1 - cam.cx) - margin;
+  const double room_y = std::min(cam.cy, cam.height - 1 - cam.cy) - margin;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d p =
+        camera_T_world * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k));
+    if (!(p.z() > 1e-6)) throw std::invalid_argument("focalToFit: a box corner is behind the camera");
+    const double x = std::abs(p.x() / p.z()), y = std::abs(p.y() / p.z());
+    if (x > 1e-9) f = std::min(f, room_x / x);
+    if (y > 1e-9) f = std::min(f, room_y / y / aspect);
+  }
+  return f;
+}
+
 RigDescription makeDefaultRig(const DefaultRigOptions& o) {
   if (o.num_cameras < 1 || o.num_cameras > 16)
     throw std::invalid_argument("makeDefaultRig: num_cameras must be in 1..16");
@@ -52,17 +69,9 @@ RigDescription makeDefaultRig(const DefaultRigOptions& o) {
     // Zoom so that the whole workspace box fills the sensor (thesis 4.1: "the whole sensor
     // area is exposed to user space"): the largest focal length that keeps every corner of the
     // box 4 px inside the image without distortion (barrel distortion only pulls corners in).
-    const double margin = 4.0 * scale;
-    double f = 1e9;
-    for (int k = 0; k < 8; ++k) {
-      const Eigen::Vector3d corner(k & 1 ? 0.5 : -0.5, k & 2 ? 0.5 : -0.5, k & 4 ? 0.75 : 0.0);
-      const Eigen::Vector3d p = cam.world_T_camera.inverse() * corner;
-      const double x = std::abs(p.x() / p.z()), y = std::abs(p.y() / p.z());
-      const double room_x = std::min(cam.cx, o.width - 1 - cam.cx) - margin;
-      const double room_y = std::min(cam.cy, o.height - 1 - cam.cy) - margin;
-      if (x > 1e-9) f = std::min(f, room_x / x);
-      if (y > 1e-9) f = std::min(f, room_y / y / 1.002);
-    }
+    const double f = focalToFit(
+        cam, Eigen::AlignedBox3d(Eigen::Vector3d(-0.5, -0.5, 0.0), Eigen::Vector3d(0.5, 0.5, 0.75)),
+        4.0 * scale);
     cam.fx = f;
     cam.fy = f * 1.002;
     rig.cameras.push_back(cam);

@@ -10,6 +10,7 @@
 #include <omp.h>
 
 #include "desk_shadow.h"
+#include "tabletop_sim/camera_effects.h"
 #include "ray_kernels.h"
 
 namespace tabletop_sim {
@@ -35,6 +36,12 @@ Eigen::Vector3d materialAlbedo(Material m) {
       return {0.12, 0.08, 0.07};
   }
   return {0.5, 0.5, 0.5};
+}
+
+std::array<Eigen::Vector3d, kNumMaterials> defaultMaterialAlbedos() {
+  std::array<Eigen::Vector3d, kNumMaterials> a;
+  for (int m = 0; m < kNumMaterials; ++m) a[m] = materialAlbedo(static_cast<Material>(m));
+  return a;
 }
 
 namespace {
@@ -80,6 +87,7 @@ struct CameraData {
   std::vector<uint8_t> desk;       // per pixel: 1 if it sees the directly lit desk top
   std::vector<float> desk_xy;      // per pixel: world x, y of the seen desk point
   std::vector<float> desk_direct;  // per pixel: grey levels a full shadow removes (R, G, B)
+  cv::Mat vignetting;              // CV_32FC1 gain per pixel; empty = none
   double max_radius = 0;           // lens model valid (monotonic) up to this normalised radius
 };
 
@@ -90,6 +98,8 @@ struct CamFrame {
   Rect all;                         // union of the primitives' rects
   Rect shadow;                      // where the person's shadow may darken the desk
   uint64_t key = 0;                 // noise key of this camera and frame
+  float gain[3] = {1.0f, 1.0f, 1.0f};  // light and exposure gain of this camera and frame
+  bool unit_gain = true;
   std::vector<int> row_x0, row_x1;  // per row of `all`: columns the primitives may cover
 };
 
@@ -143,7 +153,7 @@ struct Renderer::Impl {
   void shadePerson(const Primitive& p, const Vector3d& pt, const Vector3d& n, const Vector3d& dir,
                    float* rgb) const;
   void renderAll(const std::vector<Primitive>& person, uint64_t frame, bool masks, bool cull,
-                 RenderOutput* out) const;
+                 RenderOutput* out, const std::vector<Eigen::Vector3f>* gains) const;
 };
 
 void Renderer::Impl::precompute() {
@@ -163,6 +173,7 @@ void Renderer::Impl::precompute() {
     d.desk.assign(n, 0);
     d.desk_xy.assign(2 * n, 0.0f);
     d.desk_direct.assign(3 * n, 0.0f);
+    if (options.vignetting > 0.0) d.vignetting = vignettingGain(d.w, d.h, options.vignetting);
     // Radius (normalised image plane) up to which the radial distortion is monotonic:
     // projected bounds are trusted only inside it.
     const auto& k = d.cam.distortion;
@@ -337,7 +348,7 @@ void Renderer::Impl::renderBand(int c, int y0, const CamFrame& f,
 void Renderer::Impl::shadePerson(const Primitive& p, const Vector3d& pt, const Vector3d& normal,
                                  const Vector3d& dir, float* rgb) const {
   const Vector3d n = normal.dot(dir) > 0 ? Vector3d(-normal) : normal;  // grazing: face camera
-  Vector3d a = materialAlbedo(p.material);
+  Vector3d a = options.albedo[static_cast<int>(p.material)];
   if (p.material != Material::SKIN && p.material != Material::EYE) {
     // Fabric/hair texture that sticks to the primitive (its local frame).
     const Vector3d q = p.type == Primitive::Type::ELLIPSOID
@@ -374,11 +385,20 @@ void Renderer::Impl::shadeRow(int c, int y, const CamFrame& f, const DepthBand& 
   const bool shadow_row = !f.shadow.empty() && y >= f.shadow.y0 && y <= f.shadow.y1;
   const int sx0 = shadow_row ? f.shadow.x0 : w, sx1 = shadow_row ? f.shadow.x1 : -1;
 
+  const float* vig = d.vignetting.empty() ? nullptr : d.vignetting.ptr<float>(y);
+  const bool plain = f.unit_gain && !vig;
   auto emit = [&](int x, const float* col) {
     const uint64_t z = nextRandom(&rng);
-    dst[3 * x] = toU8(col[0] + noise[z & kNoiseMask]);
-    dst[3 * x + 1] = toU8(col[1] + noise[(z >> kNoiseBits) & kNoiseMask]);
-    dst[3 * x + 2] = toU8(col[2] + noise[(z >> (2 * kNoiseBits)) & kNoiseMask]);
+    if (plain) {
+      dst[3 * x] = toU8(col[0] + noise[z & kNoiseMask]);
+      dst[3 * x + 1] = toU8(col[1] + noise[(z >> kNoiseBits) & kNoiseMask]);
+      dst[3 * x + 2] = toU8(col[2] + noise[(z >> (2 * kNoiseBits)) & kNoiseMask]);
+      return;
+    }
+    const float v = vig ? vig[x] : 1.0f;
+    dst[3 * x] = toU8(col[0] * f.gain[0] * v + noise[z & kNoiseMask]);
+    dst[3 * x + 1] = toU8(col[1] * f.gain[1] * v + noise[(z >> kNoiseBits) & kNoiseMask]);
+    dst[3 * x + 2] = toU8(col[2] * f.gain[2] * v + noise[(z >> (2 * kNoiseBits)) & kNoiseMask]);
   };
   auto background = [&](int x, float* col) {
     col[0] = bg[3 * x];
@@ -527,9 +547,12 @@ void Renderer::Impl::shadeRow(int c, int y, const CamFrame& f, const DepthBand& 
 }
 
 void Renderer::Impl::renderAll(const std::vector<Primitive>& person, uint64_t frame, bool masks,
-                               bool cull, RenderOutput* out) const {
+                               bool cull, RenderOutput* out,
+                               const std::vector<Eigen::Vector3f>* gains) const {
   if (person.size() > 32000) throw std::invalid_argument("Renderer: too many primitives");
   const int n = static_cast<int>(cams.size());
+  if (gains && static_cast<int>(gains->size()) != n)
+    throw std::invalid_argument("Renderer: one gain per camera expected");
   out->images.resize(n);
   out->person_masks.resize(masks ? n : 0);
   out->skin_masks.resize(masks ? n : 0);
@@ -582,6 +605,11 @@ void Renderer::Impl::renderAll(const std::vector<Primitive>& person, uint64_t fr
     for (int y = 0; y < cams[c].h; y += kBandRows) fs.bands.emplace_back(c, y);
     f.key = splitmix64(splitmix64(splitmix64(options.seed) ^ frame) ^
                        (static_cast<uint64_t>(c) + 0x1234567ULL));
+    f.unit_gain = true;
+    for (int k = 0; k < 3; ++k) {
+      f.gain[k] = gains ? (*gains)[c][k] : 1.0f;
+      f.unit_gain = f.unit_gain && f.gain[k] == 1.0f;
+    }
   }
   // Two barriers per frame: after the shared shadow map, and at the end. Bands are claimed
   // dynamically one at a time, so a thread that loses its core holds up little work.
@@ -610,6 +638,11 @@ Renderer::Renderer(const tabletop_capture::RigDescription& rig, const RenderOpti
   if (!(options.noise_sigma >= 0.0) || !std::isfinite(options.noise_sigma))
     throw std::invalid_argument("Renderer: noise_sigma must be a finite value >= 0");
   if (options.threads < 0) throw std::invalid_argument("Renderer: threads must be >= 0");
+  if (!(options.vignetting >= 0.0 && options.vignetting < 1.0))
+    throw std::invalid_argument("Renderer: vignetting must be in [0, 1)");
+  for (const Eigen::Vector3d& a : options.albedo)
+    if (!a.allFinite() || a.minCoeff() < 0.0 || a.maxCoeff() > 1.0)
+      throw std::invalid_argument("Renderer: albedos must be in [0, 1]");
   if (options.bounds_padding < 0)
     throw std::invalid_argument("Renderer: bounds_padding must be >= 0");
   if (!(options.shadow_texel > 1e-4))
@@ -627,13 +660,13 @@ const cv::Mat& Renderer::backgroundColour(int c) const { return impl_->cams.at(c
 const cv::Mat& Renderer::backgroundDepth(int c) const { return impl_->cams.at(c).depth; }
 
 void Renderer::render(const std::vector<Primitive>& person, uint64_t frame, bool masks,
-                      RenderOutput* out) const {
-  impl_->renderAll(person, frame, masks, true, out);
+                      RenderOutput* out, const std::vector<Eigen::Vector3f>* gains) const {
+  impl_->renderAll(person, frame, masks, true, out, gains);
 }
 
 void Renderer::renderWithoutCulling(const std::vector<Primitive>& person, uint64_t frame,
                                     bool masks, RenderOutput* out) const {
-  impl_->renderAll(person, frame, masks, false, out);
+  impl_->renderAll(person, frame, masks, false, out, nullptr);
 }
 
 }  // namespace tabletop_sim

@@ -15,7 +15,6 @@ namespace {
 }
 
 void validate(const SimOptions& o) {
-  if (o.scenario != "default") bad("unknown scenario '" + o.scenario + "'");
   if (!(o.fps > 0.0) || !std::isfinite(o.fps)) bad("fps must be a finite value > 0");
   if (o.empty_frames < 0) bad("empty_frames must be >= 0");
   if (!(o.noise_sigma >= 0.0) || !std::isfinite(o.noise_sigma))
@@ -50,7 +49,7 @@ SimulatedRig::SimulatedRig(const SimOptions& options)
 }
 
 SimulatedRig::SimulatedRig(const SimOptions& options, const tabletop_capture::RigDescription& rig)
-    : options_(options), rig_(rig) {
+    : options_(options), rig_given_(true), rig_(rig) {
   init();
 }
 
@@ -58,6 +57,13 @@ SimulatedRig::~SimulatedRig() = default;
 
 void SimulatedRig::init() {
   validate(options_);
+  try {
+    scenario_ = scenarioByName(options_.scenario);
+  } catch (const std::invalid_argument& e) {
+    bad(e.what());
+  }
+  const bool custom = options_.scenario != "default";
+  if (custom && !rig_given_ && !scenario_.rig.cameras.empty()) rig_ = scenario_.rig;
   if (rig_.cameras.empty()) bad("the rig has no cameras");
   for (size_t i = 0; i < rig_.cameras.size(); ++i) {
     try {
@@ -66,14 +72,22 @@ void SimulatedRig::init() {
       bad(e.what());
     }
   }
-  BodyOptions bo;
-  bo.short_sleeves = options_.short_sleeves;
-  body_ = BodyModel(bo);
+  BodyOptions bo = scenario_.body;
+  bo.short_sleeves = bo.short_sleeves || options_.short_sleeves;
+  try {
+    body_ = BodyModel(bo);
+  } catch (const std::invalid_argument& e) {
+    bad(e.what());
+  }
   script_.reset(new MotionScript(MotionScript::create(options_.script, body_)));
   person_frames_ = std::max(1, static_cast<int>(std::ceil(script_->duration() * options_.fps)));
-  scene_ = std::make_shared<const Scene>(Scene::office());
+  Scene scene = Scene::office(scenario_.lighting.light);
+  for (const SceneObject& o : scenario_.extra_objects) scene.add(o);
+  scene_ = std::make_shared<const Scene>(std::move(scene));
   RenderOptions ro;
-  ro.noise_sigma = options_.noise_sigma;
+  ro.noise_sigma = custom ? scenario_.noise_sigma : options_.noise_sigma;
+  ro.albedo = scenario_.albedo;
+  ro.vignetting = scenario_.effects.vignetting;
   ro.seed = options_.seed;
   ro.shadows = options_.shadows;
   ro.threads = options_.threads;
@@ -111,8 +125,8 @@ GroundTruth SimulatedRig::truth(int frame) const {
   g.person_present = true;
   g.left_hand = handCentroid(prims, Side::LEFT);
   g.right_hand = handCentroid(prims, Side::RIGHT);
-  g.left_hand_skin = g.left_hand;  // placeholder until the scenario generator's cuffs land
-  g.right_hand_skin = g.right_hand;
+  g.left_hand_skin = visibleSkinCentroid(prims, Side::LEFT);
+  g.right_hand_skin = visibleSkinCentroid(prims, Side::RIGHT);
   g.head = body_.headCentre(p);
   const Eigen::AlignedBox3d ws(options_.workspace_min,
                                options_.workspace_min + options_.workspace_size);
@@ -136,7 +150,21 @@ SimFrame SimulatedRig::render(int frame) const {
   f.time = frame / options_.fps;
   f.truth = truth(frame);
   RenderOutput out;
-  renderer_->render(person(frame), static_cast<uint64_t>(frame), options_.render_masks, &out);
+  // The light's and each camera's exposure gain at this frame (none in a constant scenario).
+  const int n = static_cast<int>(rig_.cameras.size());
+  std::vector<Eigen::Vector3f> gains(n);
+  bool unit = true;
+  const Eigen::Vector3d light = scenario_.lighting.gain(f.time);
+  for (int c = 0; c < n; ++c) {
+    gains[c] = (light.cwiseProduct(scenario_.effects.whiteBalance(c)) *
+                scenario_.effects.exposureGain(c, f.time))
+                   .cast<float>();
+    unit = unit && gains[c] == Eigen::Vector3f::Ones();
+  }
+  renderer_->render(person(frame), static_cast<uint64_t>(frame), options_.render_masks, &out,
+                    unit ? nullptr : &gains);
+  if (scenario_.effects.postProcessing())
+    for (cv::Mat& image : out.images) applyPostProcessing(scenario_.effects, &image);
   if (options_.bayer == "none") {
     f.images = std::move(out.images);
   } else {

@@ -2,6 +2,8 @@
 // looking at the workspace (as in thesis figure 4.2: every camera sees the whole user space).
 #pragma once
 
+#include <Eigen/Geometry>
+
 #include "tabletop_capture/rig_description.h"
 
 namespace tabletop_capture {
@@ -20,5 +22,11 @@ RigDescription makeDefaultRig(const DefaultRigOptions& options = DefaultRigOptio
 
 // A camera at `center` looking at `target` (REP 103 optical frame, world z up).
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target);
+
+// The largest focal length fx (fy = fx * aspect) that keeps every corner of `box` (world)
+// `margin` pixels inside the image of `cam` (its pose, size and principal point; barrel
+// distortion only pulls corners in, so it is ignored). Every corner must be in front.
+double focalToFit(const CameraModel& cam, const Eigen::AlignedBox3d& box, double margin,
+                  double aspect = 1.002);
 
 }  // namespace tabletop_capture

@@ -23,11 +23,14 @@
 //
 // Ground-truth definitions (what ground_truth/* publish and what trackers are scored against):
 // - hand centroid = volume-weighted mean of the centroids of the hand's SKIN primitives (palm
-//   and finger segments; overlaps are counted twice, which moves it < 2 mm), see handCentroid.
+//   and finger segments; overlaps are counted twice, which moves it about 2 mm), see handCentroid.
+// - visible hand skin centroid = the same solid minus what sleeves and cuffs cover, counted
+//   once where primitives overlap (the MPF's target), see visibleSkinCentroid.
 // - head centroid = centre of the head (skin) ellipsoid, see headCentre.
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -88,8 +91,28 @@ struct BodyPose {
   const HandPose& hand(Side s) const { return hands[static_cast<int>(s)]; }
 };
 
+// Sleeves: LONG ends ~1 cm before the wrist (a bare wrist shows); ROLLED up to mid-forearm;
+// SHORT leaves the forearm and the lower upper arm bare; CUFF reaches past the wrist over part
+// of the palm (cuff_cover of its length), so the visible skin is the fingers and the rest.
+enum class Sleeves : uint8_t { LONG, ROLLED, SHORT, CUFF };
+// Hair: SHORT covers the back and top of the scalp; LONG also falls to the shoulders; NONE
+// leaves the whole head skin.
+enum class Hair : uint8_t { SHORT, LONG, NONE };
+const char* sleevesName(Sleeves s);
+const char* hairName(Hair h);
+
 struct BodyOptions {
-  bool short_sleeves = false;  // forearms (and the lower upper arm) are bare skin
+  bool short_sleeves = false;  // the same as sleeves = SHORT (kept for the rig's flag)
+  Sleeves sleeves = Sleeves::LONG;
+  double cuff_cover = 0.35;  // CUFF: fraction of the palm's length covered, from the wrist (0..0.8)
+  Hair hair = Hair::SHORT;
+  // Shape, relative to the medium-sized adult of the constants below. size scales the trunk,
+  // head (by half as much), shoulders and arm lengths (0.8..1.2); arm_length the arms again
+  // (0.85..1.15); girth the radii of trunk and arms (0.8..1.4); hand_size palm and fingers
+  // (0.75..1.25).
+  double size = 1.0, arm_length = 1.0, girth = 1.0, hand_size = 1.0;
+
+  Sleeves effectiveSleeves() const { return short_sleeves ? Sleeves::SHORT : sleeves; }
 };
 
 struct BodyFrames {
@@ -106,7 +129,8 @@ struct ArmSolution {
 
 class BodyModel {
  public:
-  // Body dimensions (m): a medium-sized adult.
+  // Body dimensions (m) of the default, medium-sized adult; a model's own are scaled by its
+  // BodyOptions (the accessors below).
   static constexpr double kSpineHeight = 0.25;        // pelvis origin -> upper-spine joint
   static constexpr double kShoulderHalfWidth = 0.17;  // chest centre line -> shoulder joint
   static constexpr double kShoulderHeight = 0.29;     // above the spine joint
@@ -116,8 +140,12 @@ class BodyModel {
   static constexpr double kWristToPalm = 0.05;        // wrist -> palm centre
   static constexpr double kMaxElbowFlex = 2.6;
 
+  // Throws std::invalid_argument for shape factors outside their ranges.
   explicit BodyModel(const BodyOptions& options = BodyOptions());
   const BodyOptions& options() const { return options_; }
+  double upperArm() const { return kUpperArm * options_.size * options_.arm_length; }
+  double forearm() const { return kForearm * options_.size * options_.arm_length; }
+  double wristToPalm() const { return kWristToPalm * options_.hand_size; }
 
   // Seated upright, hands resting palm-down on the desk near the body, head about
   // (0, -0.42, 0.57) (the figures in the header of DESIGN.md's world description).
@@ -168,6 +196,11 @@ class BodyModel {
 
 // Ground-truth hand centroid (see the header comment) from built primitives; NaN if absent.
 Eigen::Vector3d handCentroid(const std::vector<Primitive>& primitives, Side side);
+// The MPF's hand target: centroid of the hand's visible skin, the union of its skin
+// primitives minus whatever any non-skin primitive (a sleeve, a cuff) covers, sampled on a
+// grid of `spacing` (m; the centroid is good to a small fraction of it). NaN if none.
+Eigen::Vector3d visibleSkinCentroid(const std::vector<Primitive>& primitives, Side side,
+                                    double spacing = 0.002);
 inline BodyPart handPart(Side s) {
   return s == Side::LEFT ? BodyPart::LEFT_HAND : BodyPart::RIGHT_HAND;
 }

@@ -11,6 +11,7 @@
 // (seed, frame, camera, row): the same inputs give the same bytes whatever the thread count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -25,8 +26,16 @@
 
 namespace tabletop_sim {
 
+// Albedo (linear, [0, 1], R G B) of a person material in the default scenario; skin is what
+// skin classifiers and the tests compare chromaticity against.
+Eigen::Vector3d materialAlbedo(Material m);
+std::array<Eigen::Vector3d, kNumMaterials> defaultMaterialAlbedos();
+
 struct RenderOptions {
   double noise_sigma = 2.0;  // grey levels, per channel
+  // The person's colours, indexed by Material (the scenario's skin tone, clothes, hair).
+  std::array<Eigen::Vector3d, kNumMaterials> albedo = defaultMaterialAlbedos();
+  double vignetting = 0.0;  // relative darkening at the image corners (camera_effects.h)
   uint64_t seed = 1;
   bool shadows = true;          // the person's shadow on the desk
   int threads = 0;              // OpenMP threads; 0 = OpenMP default
@@ -43,10 +52,6 @@ struct RenderOutput {
   std::vector<cv::Mat> skin_masks;    // CV_8UC1, 255 = visible skin (only when requested)
 };
 
-// Albedo (linear, [0, 1], R G B) of a person material; skin is what skin classifiers and the
-// tests compare chromaticity against.
-Eigen::Vector3d materialAlbedo(Material m);
-
 class Renderer {
  public:
   // Throws std::invalid_argument for an empty rig, bad sizes or negative noise.
@@ -61,9 +66,11 @@ class Renderer {
   const Scene& scene() const;
 
   // Renders all cameras. `frame` keys the noise. Reuses out's buffers when sizes match.
-  // Safe to call concurrently (no shared mutable state).
+  // Safe to call concurrently (no shared mutable state). `gains` (optional, one per camera):
+  // per-channel gain of everything the camera sees this frame (light changes, exposure),
+  // applied before the noise.
   void render(const std::vector<Primitive>& person, uint64_t frame, bool masks,
-              RenderOutput* out) const;
+              RenderOutput* out, const std::vector<Eigen::Vector3f>* gains = nullptr) const;
   // Same images, but every primitive is ray tested at every pixel: the no-culling baseline
   // for benchmarks and the exactness test of the culling.
   void renderWithoutCulling(const std::vector<Primitive>& person, uint64_t frame, bool masks,

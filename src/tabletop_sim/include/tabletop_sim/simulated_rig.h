@@ -17,6 +17,7 @@
 #include "tabletop_sim/motion_script.h"
 #include "tabletop_sim/oracle.h"
 #include "tabletop_sim/renderer.h"
+#include "tabletop_sim/scenario.h"
 #include "tabletop_sim/scene.h"
 
 namespace tabletop_sim {
@@ -81,6 +82,7 @@ class SimulatedRig {
   const MotionScript& script() const { return *script_; }
   const Renderer& renderer() const { return *renderer_; }
   const std::shared_ptr<const Scene>& scene() const { return scene_; }
+  const Scenario& scenario() const { return scenario_; }
 
   // Frames in one pass: empty frames + the script's frames. Later frames loop the script
   // (the empty frames are not repeated).
@@ -98,6 +100,8 @@ class SimulatedRig {
  private:
   void init();
   SimOptions options_;
+  bool rig_given_ = false;
+  Scenario scenario_;
   tabletop_capture::RigDescription rig_;
   BodyModel body_;
   std::unique_ptr<MotionScript> script_;

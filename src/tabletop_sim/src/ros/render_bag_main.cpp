@@ -27,6 +27,8 @@ void usage() {
       "  --seed N          noise seed (default 1)\n"
       "  --noise SIGMA     sensor noise in grey levels (default 2.0)\n"
       "  --bayer ENC       write Bayer images (bayer_rggb8, ...) instead of rgb8\n"
+      "  --scenario NAME   default, a preset or random-SEED (tabletop_sim/scenario.h);\n"
+      "                    any but default replaces cameras, size and noise\n"
       "  --short-sleeves   bare forearms\n"
       "  --no-compress     do not LZ4-compress the bag chunks\n");
 }
@@ -51,6 +53,7 @@ int main(int argc, char** argv) {
     else if (args.is("--noise")) so.noise_sigma = args.number(0.0, 255.0);
     else if (args.is("--bayer")) so.bayer = args.text();
     else if (args.is("--short-sleeves")) so.short_sleeves = true;
+    else if (args.is("--scenario")) so.scenario = args.text();
     else if (args.is("--no-compress")) bo.lz4 = false;
     else if (args.help()) {
       usage();

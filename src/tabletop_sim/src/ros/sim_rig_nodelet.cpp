@@ -75,6 +75,7 @@ class SimRigNodelet : public nodelet::Nodelet {
         .add("seed", &seed)
         .add("noise_sigma", &o.noise_sigma)
         .add("bayer", &o.bayer)
+        .add("scenario", &o.scenario)
         .add("short_sleeves", &o.short_sleeves)
         .add("shadows", &o.shadows)
         .add("threads", &o.threads)
@@ -138,11 +139,13 @@ class SimRigNodelet : public nodelet::Nodelet {
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
     NODELET_INFO("simulated rig: %zu cameras %dx%d at %.1f fps, script '%s', %d empty frames, "
                  "seed %d, encoding %s%s",
-                 rig.cameras.size(), o.width, o.height, o.fps, o.script.c_str(), o.empty_frames,
+                 rig.cameras.size(), rig.cameras[0].width, rig.cameras[0].height, o.fps, o.script.c_str(), o.empty_frames,
                  seed, encoding_.c_str(),
                  lockstep_ > 0 ? (", in lockstep with " + lockstep_topic + " (" +
                                   std::to_string(lockstep_) + " sets in flight)").c_str()
                                : "");
+    if (o.scenario != "default")
+      NODELET_INFO("simulated rig: scenario %s", sim_->scenario().describe().c_str());
     running_ = true;
     worker_ = std::thread(&SimRigNodelet::run, this);
   }

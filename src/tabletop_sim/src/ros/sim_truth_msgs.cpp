@@ -21,8 +21,8 @@ tabletop_msgs::TrackedTargets toTargetsMsg(const GroundTruth& gt, const ros::Tim
     uint8_t type;
     const Eigen::Vector3d& p;
     bool in;
-  } items[] = {{0, tabletop_msgs::TrackedTarget::HAND, gt.left_hand, gt.left_hand_in_workspace},
-               {1, tabletop_msgs::TrackedTarget::HAND, gt.right_hand, gt.right_hand_in_workspace},
+  } items[] = {{0, tabletop_msgs::TrackedTarget::HAND, gt.left_hand_skin, gt.left_hand_in_workspace},
+               {1, tabletop_msgs::TrackedTarget::HAND, gt.right_hand_skin, gt.right_hand_in_workspace},
                {2, tabletop_msgs::TrackedTarget::HEAD, gt.head, gt.head_in_workspace}};
   for (const auto& it : items) {
     tabletop_msgs::TrackedTarget t;

@@ -12,8 +12,10 @@
 
 namespace tabletop_sim {
 
-// Targets: id 0 = left hand, 1 = right hand (HAND), 2 = head (HEAD); active while the person
-// is present and the target's centroid is inside the workspace box.
+// Targets: id 0 = left hand, 1 = right hand (HAND) at the centroid of the hand's visible skin
+// (GroundTruth::*_hand_skin, the MPF's target), 2 = head (HEAD) at its centre; active while the
+// person is present and the hand's (palm + fingers) or head's centroid is inside the workspace
+// box. BodyPose carries the palm + fingers centroids (the body model's hands).
 tabletop_msgs::TrackedTargets toTargetsMsg(const GroundTruth& truth, const ros::Time& stamp,
                                            const std::string& frame_id);
 tabletop_msgs::BodyPose toBodyPoseMsg(const GroundTruth& truth, const ros::Time& stamp,
