@@ -14,11 +14,11 @@ namespace cvephands {
 struct ScenarioEvalResult;
 
 // One panel per measure (default: body IoU, hands vs visible skin, head absolute), one bar per
-// scenario (a cross where it failed to run or was not measured, an arrow for "never"), and a
-// horizontal line per bar of `bars` on that measure (solid: median, dashed: worst decile,
-// dotted: worst). False if the file cannot be written.
+// scenario (a cross where it failed to run or was not measured, a red full bar for "never"), and
+// a horizontal line per bar of each set on that measure (colour: the set, the first one green;
+// solid: median, dashed: worst decile, dotted: worst). False if the file cannot be written.
 bool writeSuiteBarsPlot(const std::string& path, const std::vector<ScenarioFigures>& scenarios,
-                        const BarSet& bars,
+                        const std::vector<BarSet>& bars,
                         const std::vector<std::string>& keys = {"body_iou", "hand_skin_mm", "head_mm"},
                         int width = 1000, int panel_height = 260);
 
