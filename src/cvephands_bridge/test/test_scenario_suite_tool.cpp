@@ -51,8 +51,13 @@ std::string tempDir() {
   return d ? d : "/tmp/scenario_suite_test";
 }
 
+// Removes a test's folder unless the test failed (then its report stays for a look).
+void cleanUp(const std::string& dir) {
+  if (!::testing::Test::HasFailure()) (void)std::system(("rm -rf '" + dir + "'").c_str());
+}
+
 TEST(ScenarioSuiteTool, QuickSubsetMeetsTheRegressionBarsAndWritesReportAndPlots) {
-  const std::string dir = tempDir() + "/out";
+  const std::string base = tempDir(), dir = base + "/out";
   const ToolRun r = runTool("--quick --assert-bars regression", dir);
   std::printf("%s", r.err.c_str());
   EXPECT_EQ(r.status, 0) << r.err;
@@ -69,10 +74,11 @@ TEST(ScenarioSuiteTool, QuickSubsetMeetsTheRegressionBarsAndWritesReportAndPlots
   EXPECT_TRUE(exists(dir + "/default_wave_tracking.png"));
   EXPECT_TRUE(exists(dir + "/default_wave_volumes.png"));
   EXPECT_TRUE(exists(dir + "/default_wave_frames.csv"));
+  cleanUp(base);
 }
 
 TEST(ScenarioSuiteTool, ScenarioThatCannotRunIsReportedTheOthersRunAndTheExitStatusIsOne) {
-  const std::string dir = tempDir() + "/out";
+  const std::string base = tempDir(), dir = base + "/out";
   const ToolRun r = runTool("--scenarios no-such-scenario,default --frames 5 --mesh-every 0", dir);
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("no-such-scenario (all): FAILED TO RUN"), std::string::npos) << r.err;
@@ -81,12 +87,14 @@ TEST(ScenarioSuiteTool, ScenarioThatCannotRunIsReportedTheOthersRunAndTheExitSta
   EXPECT_NE(md.find("| no-such-scenario | all | - |"), std::string::npos) << md;
   EXPECT_NE(md.find("## Scenarios that failed to run"), std::string::npos);
   EXPECT_NE(md.find("## Summary over 1 scenarios"), std::string::npos);
+  cleanUp(base);
 }
 
 TEST(ScenarioSuiteTool, BadOptionsExitWithStatusTwo) {
-  const std::string dir = tempDir() + "/out";
+  const std::string base = tempDir(), dir = base + "/out";
   EXPECT_EQ(runTool("--assert-bars strict", dir).status, 2);
   EXPECT_EQ(runTool("--frames abc", dir).status, 2);
+  cleanUp(base);
 }
 
 }  // namespace

@@ -3,8 +3,8 @@
 // render -> pSfS -> MPF, volumes vs the occupancy oracle, hands and head vs the truth, hand
 // meshes vs the true surface); the suite aggregates the figures (median, worst decile; see
 // suite_report.h) and writes <out>/report.md, <out>/suite_bars.png and per scenario
-// <name>_tracking.png, <name>_volumes.png and <name>_frames.csv. Prints the report's path on
-// stdout, progress on stderr.
+// <name>_tracking.png, <name>_volumes.png, <name>_frames.csv and <name>_summary.txt (the
+// per-target tracking tables). Prints the report's path on stdout, progress on stderr.
 //
 //   scenario_suite [--scenarios a,b,c] [--random N --first-seed S] [--frames F] [--script NAME]
 //                  [--seed N] [--mesh-every K] [--empty-frames E] [--iou-threshold P] [--out DIR]
@@ -44,7 +44,8 @@ struct Entry {
 // The CI subset (--quick): until the scenario generator lands only "default" runs, so the subset
 // is the default scenario on four motion scripts (waving, pointing, folded hands: the merge and
 // split of the hand tracks, reaching to targets), 60 person frames each after 10 empty-scene
-// frames, meshes every 20th frame. About 1 minute on a 2-core AVX-512 VM (docs/benchmarks.md).
+// frames, meshes every 20th frame: 20 s on an idle 2-core AVX-512 VM, about a minute beside a
+// busy neighbour (docs/benchmarks.md, "Scenario suite").
 // MERGE HOOK (scenario generator): replace three of these with {"random-1", "all"},
 // {"random-2", "all"}, {"random-3", "all"} and re-measure the regression floors
 // (suite_report.cpp).
@@ -107,17 +108,22 @@ std::string run(const std::string& cmd) {  // first line of a command's output (
   return out;
 }
 
+// "model name" of the first CPU in /proc/cpuinfo, with its family and model numbers (VMs often
+// show a generic name such as "AMD EPYC"); its flags go to *flags.
 std::string cpuModel(std::string* flags) {
   std::ifstream in("/proc/cpuinfo");
-  std::string line, model;
+  std::string line, model, family, number;
   while (std::getline(in, line)) {
     const auto colon = line.find(':');
-    if (colon == std::string::npos) continue;
+    if (colon == std::string::npos || colon == 0) continue;
     const std::string key = line.substr(0, line.find_last_not_of(" \t", colon - 1) + 1);
     const std::string value = colon + 2 <= line.size() ? line.substr(colon + 2) : "";
     if (key == "model name" && model.empty()) model = value;
+    if (key == "cpu family" && family.empty()) family = value;
+    if (key == "model" && number.empty()) number = value;
     if (key == "flags" && flags->empty()) *flags = " " + value + " ";
   }
+  if (!model.empty() && !family.empty()) model += " (family " + family + " model " + number + ")";
   return model;
 }
 
@@ -275,6 +281,10 @@ int main(int argc, char** argv) {
       if (r.tracking_skin.writePlot(out + "/" + stem + "_tracking.png")) plots.push_back(stem + "_tracking.png");
       if (cvephands::writeVolumeIoUPlot(out + "/" + stem + "_volumes.png", r)) plots.push_back(stem + "_volumes.png");
       writeFramesCsv(out + "/" + stem + "_frames.csv", r);
+      // The evaluators' own tables (per target: mean, std, max, losses, delays, switches).
+      std::ofstream(out + "/" + stem + "_summary.txt")
+          << r.summary() << "\nvs the visible-skin centroid (the MPF's target):\n" << r.tracking_skin.summary()
+          << "\nvs the palm + fingers centroid:\n" << r.tracking_palm.summary();
       std::fprintf(stderr, "%s%s: body IoU %.3f, hands %s mm, head %s mm, mesh %s mm, %.1f s\n",
                    tty ? "\r" : "", head, f.body_iou, cvephands::formatValue(f.hand_skin_mm, 1).c_str(),
                    cvephands::formatValue(f.head_mm, 1).c_str(),
