@@ -43,7 +43,7 @@ TriangleMesh insidePart(const TriangleMesh& m, const Eigen::AlignedBox3d& inner)
 
 // mesh -> truth from the mesh's inner part against all samples; truth -> mesh from the inner
 // samples against the whole mesh (so neither side is penalised for the other's cut).
-MeshAccuracy score(const TriangleMesh& mesh, const sim::SurfaceSamples& truth,
+MeshAccuracy scoreMesh(const TriangleMesh& mesh, const sim::SurfaceSamples& truth,
                    const Eigen::AlignedBox3d& inner) {
   std::vector<Eigen::Vector3f> inner_truth;
   for (const Eigen::Vector3f& p : truth.points)
@@ -63,25 +63,77 @@ void addStats(const MeshAccuracy& a, tabletop_common::RunningStats* m2t,
 
 }  // namespace
 
-HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
+namespace {
+
+void validate(const HandMeshEvalOptions& o) {
   if (o.every < 1) throw std::invalid_argument("evaluateHandMeshes: every must be >= 1");
   if (o.frames < 0) throw std::invalid_argument("evaluateHandMeshes: frames must be >= 0");
   if (!(o.iso > 0.0 && o.iso < 1.0)) throw std::invalid_argument("evaluateHandMeshes: iso in (0, 1)");
   if (!(o.border_voxels >= 0.0)) throw std::invalid_argument("evaluateHandMeshes: border_voxels < 0");
+}
+
+MarchingCubesOptions meshingOptions(const HandMeshEvalOptions& o, MeshingMode mode) {
+  validate(o);
   MarchingCubesOptions mo;
   mo.iso = static_cast<float>(std::floor(255.0 * o.iso) + 0.5);
   mo.threads = 1;
-  MarchingCubes prob(mo);
-  mo.mode = MeshingMode::kBinary;
-  MarchingCubes binary(mo);
+  mo.mode = mode;
+  return mo;
+}
+
+}  // namespace
+
+HandMeshScorer::HandMeshScorer(const HandMeshEvalOptions& o)
+    : options_(o),
+      probabilistic_(meshingOptions(o, MeshingMode::kProbabilistic)),
+      binary_(meshingOptions(o, MeshingMode::kBinary)) {}
+
+HandMeshSample HandMeshScorer::score(const psfs::ProbabilityVolume& vol,
+                                     const std::vector<sim::Primitive>& person, int frame,
+                                     int side, bool with_binary, TriangleMesh* probabilistic_mesh,
+                                     TriangleMesh* binary_mesh) {
+  const HandMeshEvalOptions& o = options_;
   sim::SurfaceSampleOptions sso;
   sso.spacing = o.spacing;
   sso.seed = static_cast<uint32_t>(o.seed);
   // The skin hull ends where the sleeve begins: that cuff face is part of what the mesh should
   // show (the box cuts are handled by the border band instead).
   sso.clothing_interface = true;
+  const ProbabilityGridView g = viewOf(vol);
+  const size_t min_triangles = size_t(std::max(0, o.min_component_triangles));
+  HandMeshSample s;
+  s.frame = frame;
+  s.side = side;
+  TriangleMesh pm, bm;
+  auto t0 = std::chrono::steady_clock::now();
+  probabilistic_.extract(g, &pm);
+  removeSmallComponents(&pm, min_triangles);
+  s.mesh_ms_probabilistic = msSince(t0);
+  s.triangles_probabilistic = pm.numTriangles();
+  if (with_binary) {
+    t0 = std::chrono::steady_clock::now();
+    binary_.extract(g, &bm);
+    removeSmallComponents(&bm, min_triangles);
+    s.mesh_ms_binary = msSince(t0);
+    s.triangles_binary = bm.numTriangles();
+  }
+  const Eigen::AlignedBox3d box(vol.grid.origin, vol.grid.maxCorner());
+  const Eigen::Vector3d band = Eigen::Vector3d::Constant(o.border_voxels * vol.grid.voxel_size);
+  const Eigen::AlignedBox3d inner(box.min() + band, box.max() - band);
+  const sim::SurfaceSamples truth = sim::sampleSkinSurface(person, box, sso);
+  s.truth_area_m2 = truth.area;
+  s.probabilistic = scoreMesh(pm, truth, inner);
+  if (with_binary) s.binary = scoreMesh(bm, truth, inner);
+  if (probabilistic_mesh) *probabilistic_mesh = std::move(pm);
+  if (binary_mesh) *binary_mesh = std::move(bm);
+  return s;
+}
 
+HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
+  validate(o);
+  HandMeshScorer scorer(o);
   SimHandVolumeOptions so;
+  so.scenario = o.scenario;
   so.script = o.script;
   so.frames = o.frames;
   so.every = o.every;
@@ -101,31 +153,10 @@ HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
     TriangleMesh meshes[2][2];  // [mode][side]
     bool meshed[2] = {false, false};
     for (size_t h = 0; h < sides.size(); ++h) {
-      const psfs::ProbabilityVolume& vol = frame.result->hands[h];
-      const ProbabilityGridView g = viewOf(vol);
-      HandMeshSample s;
-      s.frame = f;
-      s.side = sides[h];
-      TriangleMesh& pm = meshes[0][s.side];
-      TriangleMesh& bm = meshes[1][s.side];
-      auto t0 = std::chrono::steady_clock::now();
-      prob.extract(g, &pm);
-      removeSmallComponents(&pm, size_t(std::max(0, o.min_component_triangles)));
-      s.mesh_ms_probabilistic = msSince(t0);
-      t0 = std::chrono::steady_clock::now();
-      binary.extract(g, &bm);
-      removeSmallComponents(&bm, size_t(std::max(0, o.min_component_triangles)));
-      s.mesh_ms_binary = msSince(t0);
-      s.triangles_probabilistic = pm.numTriangles();
-      s.triangles_binary = bm.numTriangles();
-      meshed[s.side] = !pm.empty();
-      const Eigen::AlignedBox3d box(vol.grid.origin, vol.grid.maxCorner());
-      const Eigen::Vector3d band = Eigen::Vector3d::Constant(o.border_voxels * vol.grid.voxel_size);
-      const Eigen::AlignedBox3d inner(box.min() + band, box.max() - band);
-      const sim::SurfaceSamples truth = sim::sampleSkinSurface(person, box, sso);
-      s.truth_area_m2 = truth.area;
-      s.probabilistic = score(pm, truth, inner);
-      s.binary = score(bm, truth, inner);
+      const int side = sides[h];
+      const HandMeshSample s = scorer.score(frame.result->hands[h], person, f, side, true,
+                                            &meshes[0][side], &meshes[1][side]);
+      meshed[side] = !meshes[0][side].empty();
       addStats(s.probabilistic, &r.prob_mesh_to_truth, &r.prob_truth_to_mesh,
                &r.prob_p95_mesh_to_truth, &r.prob_p95_truth_to_mesh);
       addStats(s.binary, &r.bin_mesh_to_truth, &r.bin_truth_to_mesh, &r.bin_p95_mesh_to_truth,

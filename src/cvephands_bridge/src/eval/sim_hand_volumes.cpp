@@ -14,6 +14,7 @@ void visitSimHandFrames(const SimHandVolumeOptions& o,
     throw std::invalid_argument("visitSimHandFrames: first_frame and frames must be >= 0");
   if (o.every < 1) throw std::invalid_argument("visitSimHandFrames: every must be >= 1");
   sim::SimOptions so;
+  so.scenario = o.scenario;
   so.script = o.script;
   so.seed = static_cast<uint64_t>(o.seed);
   so.num_cameras = o.cameras;

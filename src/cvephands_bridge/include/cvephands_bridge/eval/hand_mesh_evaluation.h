@@ -21,11 +21,14 @@
 #include "cvephands_bridge/mesh/marching_cubes.h"
 #include "cvephands_bridge/mesh/mesh_accuracy.h"
 #include "cvephands_bridge/mesh/triangle_mesh.h"
+#include "psfs_reconstruction/probability_volume.h"
 #include "tabletop_common/running_stats.h"
+#include "tabletop_sim/primitives.h"
 
 namespace cvephands {
 
 struct HandMeshEvalOptions {
+  std::string scenario = "default";      // simulated rig scenario (tabletop_sim::SimOptions)
   std::string script = "reach_targets";  // simulated rig motion script
   int frames = 0;             // script frames to run after the background (0 = the whole script)
   int every = 5;              // score every n-th frame (surface sampling costs ~0.2 s per hand)
@@ -72,5 +75,25 @@ struct HandMeshEvalResult {
 // Throws std::invalid_argument for bad options, std::runtime_error if the skin model cannot be
 // read.
 HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& options);
+
+// The per-hand step of evaluateHandMeshes, for loops that make their own hand sub-volumes (the
+// scenario evaluation): meshes one sub-volume (probabilistic and, if asked, binary marching
+// cubes; specks removed) and scores the meshes against the true skin surface inside the cube,
+// with the options' iso, spacing, border_voxels, min_component_triangles and seed (the other
+// fields are not used). Throws std::invalid_argument for bad options.
+class HandMeshScorer {
+ public:
+  explicit HandMeshScorer(const HandMeshEvalOptions& options);
+  // `person`: the frame's primitives (SimulatedRig::person). The meshes are returned through
+  // the pointers when given; binary = false leaves the binary fields of the sample empty.
+  HandMeshSample score(const psfs::ProbabilityVolume& volume,
+                       const std::vector<tabletop_sim::Primitive>& person, int frame, int side,
+                       bool binary = true, TriangleMesh* probabilistic_mesh = nullptr,
+                       TriangleMesh* binary_mesh = nullptr);
+
+ private:
+  HandMeshEvalOptions options_;
+  MarchingCubes probabilistic_, binary_;
+};
 
 }  // namespace cvephands

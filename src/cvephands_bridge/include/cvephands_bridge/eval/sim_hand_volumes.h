@@ -19,6 +19,7 @@
 namespace cvephands {
 
 struct SimHandVolumeOptions {
+  std::string scenario = "default";  // simulated rig scenario (tabletop_sim::SimOptions)
   std::string script = "wave";  // simulated rig motion script (MotionScript::names())
   int first_frame = 0;          // script frames skipped after the background frames
   int frames = 50;              // script frames after those (0 = to the end of the script)

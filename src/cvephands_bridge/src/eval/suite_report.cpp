@@ -1,0 +1,379 @@
+#include "cvephands_bridge/eval/suite_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "cvephands_bridge/eval/scenario_evaluation.h"
+
+namespace cvephands {
+namespace {
+
+constexpr double kNaN = ScenarioFigures::kNaN;
+
+std::vector<double> measured(std::vector<double> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return std::isnan(x); }), v.end());
+  return v;
+}
+
+// Best first.
+std::vector<double> sortedBestFirst(std::vector<double> v, Better better) {
+  v = measured(std::move(v));
+  if (better == Better::kHigher)
+    std::sort(v.begin(), v.end(), [](double a, double b) { return a > b; });
+  else
+    std::sort(v.begin(), v.end());
+  return v;
+}
+
+std::string cell(const std::string& s) {  // a markdown table cell: no '|' or line breaks
+  std::string out;
+  for (char c : s) {
+    if (c == '|') out += "\\|";
+    else if (c == '\n' || c == '\r') out += ' ';
+    else out += c;
+  }
+  return out;
+}
+
+std::string fmt(double v, int decimals) { return formatValue(v, decimals); }
+
+}  // namespace
+
+// ---- per-scenario figures -----------------------------------------------------------------
+
+ScenarioFigures ScenarioFigures::of(const ScenarioEvalResult& r) {
+  ScenarioFigures f;
+  f.name = r.scenario;
+  f.script = r.script;
+  f.description = r.description;
+  f.empty_frames = r.empty_frames;
+  f.person_frames = r.person_frames;
+  if (r.body_iou.count()) {
+    f.body_iou = r.body_iou.mean(), f.body_iou_min = r.body_iou.min();
+    f.skin_iou = r.skin_iou.mean(), f.skin_iou_min = r.skin_iou.min();
+  }
+  if (r.body_precision.count()) f.body_precision = r.body_precision.mean();
+  if (r.body_recall.count()) f.body_recall = r.body_recall.mean();
+  f.hand_skin_mm = r.handErrorMeanMm(0);
+  f.hand_skin_max_mm = r.handErrorMaxMm(0);
+  f.hand_palm_mm = r.handErrorMeanMm(1);
+  f.head_mm = r.headErrorMeanMm();
+  f.head_max_mm = r.headErrorMaxMm();
+  f.head_aligned_mm = r.headAlignedErrorMeanMm();
+  f.tracked_fraction = r.trackedFraction();
+  if (r.person_frames > 0) {
+    f.losses = r.losses();
+    f.identity_switches = r.identitySwitches();
+    f.false_targets_person = r.false_target_frames_person;
+  }
+  if (r.empty_frames > 0) f.false_targets_empty = r.false_target_frames_empty;
+  f.meshes = static_cast<int>(r.meshes.size());
+  if (r.mesh_to_truth_mm.count())
+    f.mesh_mm = r.mesh_to_truth_mm.mean(), f.mesh_max_mm = r.mesh_to_truth_mm.max();
+  if (r.psfs_ms.count()) f.psfs_ms = r.psfs_ms.mean(), f.mpf_ms = r.mpf_ms.mean();
+  f.wall_s = r.wall_s;
+  return f;
+}
+
+ScenarioFigures ScenarioFigures::failed(const std::string& name, const std::string& script,
+                                        const std::string& description, const std::string& error) {
+  ScenarioFigures f;
+  f.name = name;
+  f.script = script;
+  f.description = description;
+  f.error = error.empty() ? "unknown error" : error;
+  return f;
+}
+
+// ---- measures and statistics --------------------------------------------------------------
+
+const std::vector<MeasureDef>& suiteMeasures() {
+  using F = ScenarioFigures;
+  static const std::vector<MeasureDef> defs = {
+      {"body_iou", "body IoU", "", Better::kHigher, &F::body_iou, 3},
+      {"body_precision", "body precision", "", Better::kHigher, &F::body_precision, 3},
+      {"body_recall", "body recall", "", Better::kHigher, &F::body_recall, 3},
+      {"skin_iou", "skin IoU", "", Better::kHigher, &F::skin_iou, 3},
+      {"hand_skin_mm", "hands vs visible-skin centroid", "mm", Better::kLower, &F::hand_skin_mm, 1},
+      {"hand_palm_mm", "hands vs palm + fingers centroid", "mm", Better::kLower, &F::hand_palm_mm, 1},
+      {"head_mm", "head centre, absolute", "mm", Better::kLower, &F::head_mm, 1},
+      {"head_aligned_mm", "head centre, aligned", "mm", Better::kLower, &F::head_aligned_mm, 1},
+      {"tracked_fraction", "tracked fraction", "", Better::kHigher, &F::tracked_fraction, 3},
+      {"losses", "track losses", "", Better::kLower, &F::losses, 1},
+      {"identity_switches", "identity switches", "", Better::kLower, &F::identity_switches, 1},
+      {"false_targets_empty", "false-target frames, empty scene", "", Better::kLower,
+       &F::false_targets_empty, 1},
+      {"false_targets_person", "false-target frames, with person", "", Better::kLower,
+       &F::false_targets_person, 1},
+      {"mesh_mm", "hand mesh to truth", "mm", Better::kLower, &F::mesh_mm, 2},
+  };
+  return defs;
+}
+
+const MeasureDef& measureDef(const std::string& key) {
+  for (const MeasureDef& d : suiteMeasures())
+    if (key == d.key) return d;
+  throw std::invalid_argument("unknown suite measure '" + key + "'");
+}
+
+double median(std::vector<double> v) {
+  v = measured(std::move(v));
+  if (v.empty()) return kNaN;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  if (n % 2) return v[n / 2];
+  const double a = v[n / 2 - 1], b = v[n / 2];
+  if (std::isinf(a) || std::isinf(b)) return a == b ? a : (std::isinf(a) ? a : b);
+  return 0.5 * (a + b);
+}
+
+double worstDecile(std::vector<double> v, Better better) {
+  v = sortedBestFirst(std::move(v), better);
+  if (v.empty()) return kNaN;
+  // Nearest rank: the ceil(0.9 n)-th best = the (n / 10 + 1)-th worst (integer arithmetic, so
+  // that n = 10 gives the 9th best and not, through 0.9 * 10 = 9.000000000000002, the 10th).
+  return v[v.size() - 1 - v.size() / 10];
+}
+
+double worstValue(std::vector<double> v, Better better) {
+  v = sortedBestFirst(std::move(v), better);
+  return v.empty() ? kNaN : v.back();
+}
+
+std::vector<MeasureSummary> summarize(const std::vector<ScenarioFigures>& scenarios) {
+  std::vector<MeasureSummary> out;
+  for (const MeasureDef& d : suiteMeasures()) {
+    std::vector<double> v;
+    for (const ScenarioFigures& s : scenarios)
+      if (s.ran()) v.push_back(s.*d.field);
+    MeasureSummary m;
+    m.key = d.key;
+    m.count = static_cast<int>(measured(v).size());
+    m.median = median(v);
+    m.worst_decile = worstDecile(v, d.better);
+    m.worst = worstValue(v, d.better);
+    out.push_back(m);
+  }
+  return out;
+}
+
+const char* statisticName(Statistic s) {
+  switch (s) {
+    case Statistic::kMedian: return "median";
+    case Statistic::kWorstDecile: return "worst decile";
+    case Statistic::kWorst: return "worst";
+  }
+  return "?";
+}
+
+// ---- bars ---------------------------------------------------------------------------------
+
+BarSet designBars() {
+  BarSet b;
+  b.name = "design";
+  b.note = "DESIGN.md section 6 / issue 15: accuracy over the scenario suite.";
+  b.bars = {
+      {"body_iou", Statistic::kMedian, 0.75},
+      {"body_iou", Statistic::kWorstDecile, 0.65},
+      {"hand_skin_mm", Statistic::kMedian, 8.0},
+      {"hand_skin_mm", Statistic::kWorstDecile, 12.0},
+      {"head_mm", Statistic::kMedian, 12.0},
+      {"head_mm", Statistic::kWorstDecile, 20.0},
+      {"losses", Statistic::kMedian, 0.0},
+      {"identity_switches", Statistic::kMedian, 0.0},
+      {"false_targets_empty", Statistic::kWorst, 0.0},
+      {"mesh_mm", Statistic::kMedian, 8.0},
+  };
+  return b;
+}
+
+// REGRESSION GUARDS, not the design bars (those are reported on every run, whatever is
+// asserted). Floors a little below what `scenario_suite --quick` measured when they were set
+// (2026-12-02: the default scenario on 4 scripts, before the scenario generator;
+// docs/benchmarks.md, "Scenario suite"): they catch a change that makes the pipeline worse than it was, while today's pipeline still misses several design bars. The
+// figures are deterministic (same on every machine and ISA), so the margins are not for noise:
+// they leave room for harmless changes (e.g. the visible-skin hand truth once the generator
+// fills it in). Raise them when the pipeline improves; re-measure them when the quick subset
+// changes (random scenarios join it once the generator lands).
+namespace regression {
+constexpr double kBodyIouMedian = 0.63;          // measured 0.654
+constexpr double kBodyIouWorstDecile = 0.55;     // measured 0.580 (fold_hands)
+constexpr double kSkinIouMedian = 0.26;          // measured 0.288 (no design bar: a guard only)
+constexpr double kHandSkinMmMedian = 9.5;        // measured 8.1
+constexpr double kHandSkinMmWorstDecile = 17.0;  // measured 14.7 (fold_hands)
+constexpr double kHeadMmMedian = 12.0;           // measured 10.4 (the design bar itself)
+constexpr double kHeadMmWorstDecile = 18.0;      // measured 15.5 (point)
+constexpr double kMeshMmMedian = 14.0;           // measured 12.57
+}  // namespace regression
+
+BarSet regressionBars() {
+  using namespace regression;
+  BarSet b;
+  b.name = "regression";
+  b.note = "Regression guards for --quick (a little below its figures when they were set), not "
+           "the design bars.";
+  b.bars = {
+      {"body_iou", Statistic::kMedian, kBodyIouMedian},
+      {"body_iou", Statistic::kWorstDecile, kBodyIouWorstDecile},
+      {"skin_iou", Statistic::kMedian, kSkinIouMedian},
+      {"hand_skin_mm", Statistic::kMedian, kHandSkinMmMedian},
+      {"hand_skin_mm", Statistic::kWorstDecile, kHandSkinMmWorstDecile},
+      {"head_mm", Statistic::kMedian, kHeadMmMedian},
+      {"head_mm", Statistic::kWorstDecile, kHeadMmWorstDecile},
+      // No loss or switch in the median scenario and no false target in an empty scene hold
+      // today (none at all in the subset): kept as the design states them.
+      {"losses", Statistic::kMedian, 0.0},
+      {"identity_switches", Statistic::kMedian, 0.0},
+      {"false_targets_empty", Statistic::kWorst, 0.0},
+      {"mesh_mm", Statistic::kMedian, kMeshMmMedian},
+  };
+  return b;
+}
+
+BarSet barSetByName(const std::string& name) {
+  if (name == "design") return designBars();
+  if (name == "regression") return regressionBars();
+  throw std::invalid_argument("unknown bar set '" + name + "' (valid: design, regression)");
+}
+
+std::vector<BarVerdict> checkBars(const std::vector<MeasureSummary>& summaries, const BarSet& bars) {
+  std::vector<BarVerdict> out;
+  for (const Bar& bar : bars.bars) {
+    const MeasureDef& d = measureDef(bar.key);
+    BarVerdict v;
+    v.bar = bar;
+    for (const MeasureSummary& m : summaries) {
+      if (m.key != bar.key) continue;
+      v.value = bar.statistic == Statistic::kMedian        ? m.median
+                : bar.statistic == Statistic::kWorstDecile ? m.worst_decile
+                                                           : m.worst;
+    }
+    v.measured = !std::isnan(v.value);
+    v.pass = v.measured && (d.better == Better::kHigher ? v.value >= bar.limit : v.value <= bar.limit);
+    out.push_back(v);
+  }
+  return out;
+}
+
+bool allPass(const std::vector<BarVerdict>& verdicts) {
+  for (const BarVerdict& v : verdicts)
+    if (!v.pass) return false;
+  return true;
+}
+
+std::string describeBar(const Bar& bar) {
+  const MeasureDef& d = measureDef(bar.key);
+  std::string s = std::string(d.label) + " " + statisticName(bar.statistic) +
+                  (d.better == Better::kHigher ? " >= " : " <= ") + fmt(bar.limit, d.decimals);
+  if (*d.unit) s += std::string(" ") + d.unit;
+  return s;
+}
+
+std::string formatValue(double v, int decimals) {
+  if (std::isnan(v)) return "n/a";
+  if (std::isinf(v)) return "never";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
+  return buf;
+}
+
+// ---- the report ---------------------------------------------------------------------------
+
+std::string markdownReport(const std::vector<ScenarioFigures>& scenarios,
+                           const std::vector<MeasureSummary>& summaries, const ReportContext& c) {
+  std::string s;
+  int ran = 0;
+  for (const ScenarioFigures& f : scenarios) ran += f.ran();
+  s += "# " + c.title + "\n\n";
+  s += "- date: " + c.date + "\n";
+  s += "- command: `" + c.command_line + "`\n";
+  s += "- git revision: " + (c.git_revision.empty() ? std::string("unknown") : c.git_revision) + "\n";
+  s += "- machine: " + (c.cpu_model.empty() ? std::string("unknown CPU") : c.cpu_model) + ", " +
+       std::to_string(c.cpu_cores) + " cores, " + c.isa + "\n";
+  if (!c.settings.empty()) s += "- settings: " + c.settings + "\n";
+  s += "- scenarios: " + std::to_string(scenarios.size()) + ", ran: " + std::to_string(ran) +
+       ", failed to run: " + std::to_string(scenarios.size() - ran) + "\n";
+  s += "\nTimings are for information only (no bar judges speed); errors are in mm.\n";
+
+  s += "\n## Scenarios\n\n";
+  s += "| scenario | script | frames empty / person | body IoU | skin IoU | hands vs skin | "
+       "hands vs palm | head abs | head aligned | tracked | losses | switches | false targets "
+       "empty / person | mesh | pSfS ms | MPF ms | wall s | description |\n";
+  s += "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---|\n";
+  for (const ScenarioFigures& f : scenarios) {
+    s += "| " + cell(f.name) + " | " + cell(f.script) + " | ";
+    if (!f.ran()) {
+      s += "- | - | - | - | - | - | - | - | - | - | - | - | - | - | - | **failed to run:** " +
+           cell(f.error) + " (" + cell(f.description) + ") |\n";
+      continue;
+    }
+    s += std::to_string(f.empty_frames) + " / " + std::to_string(f.person_frames) + " | " +
+         fmt(f.body_iou, 3) + " | " + fmt(f.skin_iou, 3) + " | " + fmt(f.hand_skin_mm, 1) + " | " +
+         fmt(f.hand_palm_mm, 1) + " | " + fmt(f.head_mm, 1) + " | " + fmt(f.head_aligned_mm, 1) +
+         " | " + fmt(f.tracked_fraction, 3) + " | " + fmt(f.losses, 0) + " | " +
+         fmt(f.identity_switches, 0) + " | " + fmt(f.false_targets_empty, 0) + " / " +
+         fmt(f.false_targets_person, 0) + " | " + fmt(f.mesh_mm, 2) + " | " + fmt(f.psfs_ms, 1) +
+         " | " + fmt(f.mpf_ms, 2) + " | " + fmt(f.wall_s, 1) + " | " + cell(f.description) + " |\n";
+  }
+
+  s += "\n## Summary over " + std::to_string(ran) + " scenarios\n\n";
+  s += "| measure | scenarios | median | worst decile | worst |\n|---|---:|---:|---:|---:|\n";
+  for (const MeasureSummary& m : summaries) {
+    const MeasureDef& d = measureDef(m.key);
+    const std::string unit = *d.unit ? std::string(" (") + d.unit + ")" : std::string();
+    s += "| " + std::string(d.label) + unit + " | " + std::to_string(m.count) + " | " +
+         fmt(m.median, d.decimals) + " | " + fmt(m.worst_decile, d.decimals) + " | " +
+         fmt(m.worst, d.decimals) + " |\n";
+  }
+
+  std::vector<BarSet> sets = {designBars()};
+  if (c.asserted == "regression") sets.push_back(regressionBars());
+  for (const BarSet& set : sets) {
+    const std::vector<BarVerdict> verdicts = checkBars(summaries, set);
+    const bool asserted = c.asserted == set.name;
+    s += "\n## Bars: " + set.name + (asserted ? " (asserted)" : " (reported)") + "\n\n" + set.note + "\n\n";
+    s += "| bar | value | verdict |\n|---|---:|---|\n";
+    for (const BarVerdict& v : verdicts) {
+      const MeasureDef& d = measureDef(v.bar.key);
+      s += "| " + describeBar(v.bar) + " | " + fmt(v.value, d.decimals) + " | " +
+           (v.pass ? "PASS" : (v.measured ? "FAIL" : "FAIL (not measured)")) + " |\n";
+    }
+    s += std::string("\n") + set.name + " bars: " + (allPass(verdicts) ? "all PASS" : "FAIL") + "\n";
+  }
+
+  bool any_failed = false;
+  for (const ScenarioFigures& f : scenarios) any_failed = any_failed || !f.ran();
+  if (any_failed) {
+    s += "\n## Scenarios that failed to run\n\n";
+    for (const ScenarioFigures& f : scenarios)
+      if (!f.ran()) s += "- `" + f.name + "` (script " + f.script + "): " + cell(f.error) + "\n";
+  }
+
+  if (!c.plots.empty()) {
+    s += "\n## Plots\n\n";
+    for (const std::string& p : c.plots) s += "- [" + p + "](" + p + ")\n";
+  }
+
+  s += "\n## Definitions\n\n"
+       "- Per scenario: means over its scored frames. Body and skin IoU, precision and recall of "
+       "the pSfS workspace volumes against the occupancy oracle on the same grid (person frames). "
+       "Hands: both hands pooled, over the frames where a hand is visible and tracked, against "
+       "the centroid of its visible skin (the MPF's target) and against the palm + fingers "
+       "centroid; `never` = visible for a second or more but never tracked (sorted worst). Head: "
+       "the head ellipsoid's centre, absolute and with the mean offset removed (aligned). Losses, "
+       "identity switches: all three targets. False-target frames: frames with an active target "
+       "in the empty scene (after background learning), and with a target near no true target "
+       "while the person is there. Mesh: mean distance from the probabilistic hand mesh to the "
+       "true skin surface, per scored hand, averaged.\n"
+       "- Over the suite (scenarios that ran, measures that were measured): median = middle value "
+       "(mean of the two middle ones for an even count); worst decile = the value at the 90th "
+       "percentile of badness by nearest rank, i.e. the (floor(n/10)+1)-th worst of n (the 10th "
+       "percentile for IoU, the 90th for errors; the worst one with fewer than 10 scenarios); "
+       "worst = the worst value.\n"
+       "- A bar that cannot be checked (nothing measured) does not pass.\n";
+  return s;
+}
+
+}  // namespace cvephands
