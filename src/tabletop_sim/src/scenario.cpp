@@ -283,7 +283,7 @@ Scenario scenarioByName(const std::string& name) {
     o.height = 480;
     s.rig = tabletop_capture::makeDefaultRig(o);
   } else if (name == "lights_on") {
-    s.lighting.sudden_time = 6.0;
+    s.lighting.sudden_time = 2.5;  // after the background (1 s) and a few person frames
     s.lighting.sudden_gain = 1.4;
   } else if (name == "flicker") {
     s.lighting.flicker_amplitude = 0.05;

@@ -13,6 +13,7 @@
 #include "psfs_reconstruction/gaussian_mixture.h"
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/reconstructor_config.h"
+#include "tabletop_sim/scenario.h"
 #include "tabletop_sim/simulated_rig.h"
 
 namespace cvephands {
@@ -102,11 +103,7 @@ double pooledMax(const sim::TrackingEvaluator& ev, std::initializer_list<int> ta
 }  // namespace
 
 std::string describeScenario(const std::string& scenario) {
-  // MERGE HOOK (scenario generator): once tabletop_sim/scenario.h exists, this body becomes
-  //   return tabletop_sim::scenarioByName(scenario).describe();
-  if (scenario == "default")
-    return "the default office, seated person and 8-camera ring at 320x240 (DESIGN.md section 5)";
-  return "scenario '" + scenario + "' (no description: the scenario generator is not merged yet)";
+  return tabletop_sim::scenarioByName(scenario).describe();
 }
 
 ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {

@@ -15,6 +15,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -87,6 +88,7 @@ int runSim(const std::string& scenario, const std::string& script, int frames, i
   const double dt = 1.0 / so.fps;
   const auto t0 = std::chrono::steady_clock::now();
   int skipped = 0;
+  tabletop_common::RunningStats stage_ms[3];  // classify, fusion, background update
   for (int f = 0; f < total; ++f) {
     const sim::SimFrame frame = rig.render(f);
     const psfs::FrameResult r = recon.process(frame.images, rig.rig().cameras);
@@ -95,6 +97,13 @@ int runSim(const std::string& scenario, const std::string& script, int frames, i
                    "(%d frames): not learned\n", f, r.background_frames);
     if (r.status == psfs::FrameResult::Status::kReconstructed) {
       psfs_ms->add(r.times.total);
+      stage_ms[0].add(r.times.classify);
+      if (std::getenv("TRACK_EVAL_DEBUG") && f % 10 == 0) {
+        std::fprintf(stderr, "\nframe %d mean P(F):", f);
+        for (const auto& st : r.stats) std::fprintf(stderr, " %.3f", st.mean_foreground);
+      }
+      stage_ms[1].add(r.times.body + r.times.skin);
+      stage_ms[2].add(r.times.background);
       tracker.update(r.skin, r.body, dt);
       mpf_ms->add(tracker.lastTimes().total_ms);
       ev->add(f * dt, toPoints(tracker.targets()), truthOf(frame.truth));
@@ -107,6 +116,9 @@ int runSim(const std::string& scenario, const std::string& script, int frames, i
     }
   }
   std::fprintf(stderr, "\n");
+  if (stage_ms[0].count() > 0)
+    std::fprintf(stderr, "[track_eval] pSfS stages (ms, mean): classify %.1f, fusion %.1f, "
+                 "background update %.1f\n", stage_ms[0].mean(), stage_ms[1].mean(), stage_ms[2].mean());
   return total;
 }
 
