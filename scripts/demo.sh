@@ -42,6 +42,7 @@ FRAMES=300
 OUT="$PWD/output"
 RVIZ=false
 MESH_EVAL=true
+SCENARIO=default
 CVE=true
 BROWSER=false
 PARTICIPANTS=1
@@ -56,7 +57,7 @@ while [ $# -gt 0 ]; do
     --seed) EXTRA+=("seed:=$2"); shift 2 ;;
     --bayer) EXTRA+=("bayer:=$2"); shift 2 ;;
     --short-sleeves) EXTRA+=("short_sleeves:=true"); shift ;;
-    --scenario) EXTRA+=("scenario:=$2"); shift 2 ;;
+    --scenario) SCENARIO="$2"; EXTRA+=("scenario:=$2"); shift 2 ;;
     --participants) PARTICIPANTS="$2"; EXTRA+=("participants:=$2"); shift 2 ;;
     --browser) BROWSER=true; shift ;;
     --port) PORT="$2"; shift 2 ;;
@@ -187,7 +188,8 @@ if [ "$rc" -eq 0 ] && [ "$MESH_EVAL" = true ]; then
   # Hand-mesh accuracy against the simulated truth and a picture of both hands' meshes: the
   # same reconstruction and meshing code as the pipeline, on 4 s of reach_targets.
   echo "[demo] scoring hand meshes against the true hand surface (mesh_eval, ~10 s)"
-  "$ROOT/devel/lib/cvephands_bridge/mesh_eval" --script reach_targets --frames 100 --every 20 \
+  "$ROOT/devel/lib/cvephands_bridge/mesh_eval" --scenario "$SCENARIO" --script reach_targets \
+    --frames 100 --every 20 \
     --out "$OUT" 2>/dev/null | tee -a "$OUT/summary.txt"
   rc=${PIPESTATUS[0]}
 fi

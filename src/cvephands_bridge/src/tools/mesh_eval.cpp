@@ -21,8 +21,9 @@ namespace {
 
 void usage() {
   std::fprintf(stderr,
-               "usage: mesh_eval [--script NAME] [--frames N] [--every K] [--seed N] [--iso P] "
+               "usage: mesh_eval [--scenario NAME] [--script NAME] [--frames N] [--every K] [--seed N] [--iso P] "
                "[--min-component N] [--out DIR]\n"
+               "  --scenario  simulated world: default, a preset or random-SEED (default default)\n"
                "  --script  simulated motion script (default reach_targets)\n"
                "  --frames  script frames after the 25 background frames (default: whole script)\n"
                "  --every   score every K-th frame (default 5)\n"
@@ -66,6 +67,7 @@ int main(int argc, char** argv) {
   tabletop_common::CliArgs args("mesh_eval", argc, argv, usage);
   while (args.next()) {
     if (args.is("--script")) o.script = args.text();
+    else if (args.is("--scenario")) o.scenario = args.text();
     else if (args.is("--frames")) o.frames = static_cast<int>(args.integer(0));
     else if (args.is("--every")) o.every = static_cast<int>(args.integer(1));
     else if (args.is("--seed")) o.seed = static_cast<int>(args.integer(0));
