@@ -64,7 +64,7 @@ TEST(ScenarioSuiteTool, QuickSubsetMeetsTheRegressionBarsAndWritesReportAndPlots
   EXPECT_EQ(r.out, dir + "/report.md\n");
   const std::string md = readFile(dir + "/report.md");
   ASSERT_FALSE(md.empty()) << "no report at " << dir;
-  EXPECT_NE(md.find("## Summary over 4 scenarios"), std::string::npos) << md;
+  EXPECT_NE(md.find("## Summary over 6 scenarios"), std::string::npos) << md;
   EXPECT_NE(md.find("| measure | scenarios | median | worst decile | worst |"), std::string::npos);
   EXPECT_NE(md.find("## Bars: design (reported)"), std::string::npos);
   EXPECT_NE(md.find("regression bars: all PASS"), std::string::npos) << md;

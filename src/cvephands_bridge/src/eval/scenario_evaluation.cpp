@@ -103,7 +103,12 @@ double pooledMax(const sim::TrackingEvaluator& ev, std::initializer_list<int> ta
 }  // namespace
 
 std::string describeScenario(const std::string& scenario) {
-  return tabletop_sim::scenarioByName(scenario).describe();
+  // Also called for a scenario that failed to run, so a bad name is described, not thrown.
+  try {
+    return tabletop_sim::scenarioByName(scenario).describe();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
 }
 
 ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
