@@ -76,6 +76,14 @@ OUT="$(cd "$OUT" && pwd)"
 bash "$ROOT/scripts/setup.sh"
 # shellcheck source=ros_env.sh
 source "$ROOT/scripts/ros_env.sh"
+if [ "$SCENARIO" != default ]; then
+  # A scenario brings its own cameras: the synchroniser and the monitor must expect that many
+  # (a later cameras:= overrides an earlier one given with --cameras).
+  SCENARIO_CAMERAS=$("$ROOT/devel/lib/tabletop_sim/describe_scenario" --cameras "$SCENARIO") ||
+    { echo "[demo] ERROR: unknown scenario '$SCENARIO' (describe_scenario --list)"; exit 2; }
+  EXTRA+=("cameras:=$SCENARIO_CAMERAS")
+  "$ROOT/devel/lib/tabletop_sim/describe_scenario" "$SCENARIO"
+fi
 export ROS_LOG_DIR="$OUT/ros_log"
 # Nodelet log lines as they happen, not in one block when the manager exits.
 export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
