@@ -39,6 +39,13 @@ struct Rig {
   std::vector<const psfs::BackgroundModel*> bg_ptrs;
   std::vector<cv::Mat> frames, masks;
   psfs::PixelClassifier classifier{skinModel(), {}, psfs::ClassPriors::fromOccupancy(0.1, 0.01, 8)};
+  // The thesis' rg-only model (no intensity term, no gain): what the intensity model costs.
+  psfs::PixelClassifier classifier_rg{skinModel(), rgOnly(), psfs::ClassPriors::fromOccupancy(0.1, 0.01, 8)};
+  static psfs::PixelClassifierParams rgOnly() {
+    psfs::PixelClassifierParams p;
+    p.intensity_model = false;
+    return p;
+  }
   Rig() {
     std::mt19937_64 rng(2024);
     for (int c = 0; c < kCameras; ++c) {
@@ -84,6 +91,19 @@ void BM_Classify8(benchmark::State& state) {
   setCounters(state);
 }
 BENCHMARK(BM_Classify8)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Same-run baseline: the thesis' rg-only classifier (PixelClassifierParams::intensity_model off).
+void BM_Classify8RgOnly(benchmark::State& state) {
+  Rig& r = rig();
+  const int threads = int(state.range(0));
+  std::vector<cv::Mat> out;
+  for (auto _ : state) {
+    r.classifier_rg.classify(r.frames, r.bg_ptrs, out, threads);
+    benchmark::DoNotOptimize(out.data());
+  }
+  setCounters(state);
+}
+BENCHMARK(BM_Classify8RgOnly)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 // Baseline: plain per-pixel implementation, double precision, std::exp, no vectorisation,
 // one camera after the other on one thread.

@@ -274,6 +274,7 @@ BackgroundPlanes BackgroundModel::planes() const {
   p.mean_intensity = mean_i_.data();
   p.scale_r = scale_r_.data();
   p.scale_g = scale_g_.data();
+  p.var_intensity = var_i_.data();
   return p;
 }
 

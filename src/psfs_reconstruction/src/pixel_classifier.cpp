@@ -46,7 +46,24 @@ void validateParams(const PixelClassifierParams& p) {
         "pixel classifier: need 0 <= shadow_min_intensity_ratio <= shadow_max_intensity_ratio");
   if (!(p.min_chroma_intensity >= 0.0f && std::isfinite(p.min_chroma_intensity)))
     throw std::invalid_argument("pixel classifier: min_chroma_intensity must be >= 0");
+  if (!(p.shadow_weight >= 0.0f && p.shadow_weight < 1.0f))
+    throw std::invalid_argument("pixel classifier: shadow_weight must be in [0, 1)");
+  if (!(p.gain_tolerance >= 0.0f && std::isfinite(p.gain_tolerance)))
+    throw std::invalid_argument("pixel classifier: gain_tolerance must be >= 0");
+  if (p.intensity_model && !(p.shadow_max_intensity_ratio > p.shadow_min_intensity_ratio))
+    throw std::invalid_argument(
+        "pixel classifier: the intensity model needs shadow_min_intensity_ratio < "
+        "shadow_max_intensity_ratio");
 }
+
+// The gain estimate's histogram: ratios I / I_bg in [0, 4) in steps of 1/256.
+constexpr int kGainBinsPerUnit = 256;
+constexpr int kGainBins = 4 * kGainBinsPerUnit;
+constexpr int kGainMinSamples = 64;
+constexpr double kGainMin = 0.25, kGainMax = 4.0;
+// Background intensities below this (8-bit levels) are too noisy for a ratio.
+constexpr float kGainMinBackground = 16.0f;
+constexpr float kGainMaxIntensity = 250.0f;  // saturated pixels clip the ratio
 
 std::uint8_t toByte(double p) {
   const double v = std::floor(p * 255.0 + 0.5);
@@ -120,6 +137,13 @@ struct RowConstants {
   float shadow_r2;  // squared cylinder radius; < 0 disables the cylinder
   float lo, hi;     // intensity ratio bounds
   float min_i;      // dark-pixel threshold
+  // Intensity model (PixelClassifierParams::intensity_model); use_i = 0 or 1.
+  float use_i;
+  float gain;                    // this camera's g
+  float tol2;                    // gain_tolerance^2
+  float keep_n;                  // 256 (1 - w): the Gaussian's share, per 1/256 fg density
+  float band_u;                  // 256 w / (max - min): the band's density times g I_bg
+  float dark_skin;               // P'(S|c) of a dark pixel: P(S), or eS P(S) (intensity model)
 };
 
 // Scratch for one row: 7 float rows (9 KB at 320 px: stays in L1).
@@ -137,25 +161,38 @@ PSFS_ALWAYS_INLINE void foregroundRow(const RowConstants& k, int w, const float*
                                       const float* __restrict g, const float* __restrict in,
                                       const float* __restrict mr, const float* __restrict mg,
                                       const float* __restrict mi, const float* __restrict sr,
-                                      const float* __restrict sg, float* __restrict pf,
-                                      float* __restrict dark, float* __restrict shadow) {
+                                      const float* __restrict sg, const float* __restrict vi,
+                                      float* __restrict pf, float* __restrict dark,
+                                      float* __restrict shadow) {
   constexpr float inv_pi = float(1.0 / kPi);
   const float odds = k.odds_bg, min_i = k.min_i, r2 = k.shadow_r2, lo = k.lo, hi = k.hi;
   const float outF = k.outF, keepF = k.keepF, priorF = k.priorF;
+  const float use_i = k.use_i, gain = k.gain, tol2 = k.tol2, keep_n = k.keep_n;
+  const float band_u = k.band_u;
   for (int x = 0; x < w; ++x) {
     const float dr = r[x] - mr[x], dg = g[x] - mg[x];
     const float ur = dr * sr[x], ug = dg * sg[x];
-    // p(c|notF) = exp(-m^2/2) / (2 pi s_r s_g) = (scale_r scale_g / pi) exp(-(ur^2 + ug^2))
-    const float p_bg = sr[x] * sg[x] * inv_pi * kernels::expNeg(ur * ur + ug * ug);
-    const float p_fc = 1.0f / (1.0f + odds * p_bg);
-    const float ix = in[x], mix = mi[x];
+    const float ix = in[x], mix = gain * mi[x];
     const float d = ix < min_i ? 1.0f : 0.0f;
+    // p(rg|notF) = exp(-m^2/2) / (2 pi s_r s_g) = (scale_r scale_g / pi) exp(-(ur^2 + ug^2));
+    // a dark pixel's chroma is noise: the same density as the foreground's (1).
+    const float p_rg = sr[x] * sg[x] * inv_pi * kernels::expNeg(ur * ur + ug * ug);
+    // 256 p(I|notF): Gaussian around g I_bg plus the uniform shadow/highlight band.
+    const float di = ix - mix;
+    const float half_inv_var = 0.5f / (vi[x] + tol2 * mix * mix);
+    const float n_i = std::sqrt(half_inv_var * inv_pi) * kernels::expNeg(di * di * half_inv_var);
+    const float in_band = (ix >= lo * mix ? 1.0f : 0.0f) * (ix <= hi * mix ? 1.0f : 0.0f);
+    const float q_i = keep_n * n_i + in_band * band_u / (mix > 1.0f ? mix : 1.0f);
+    const float p_rg_i = d * 1.0f + (1.0f - d) * p_rg;
+    const float p_bg = use_i * (p_rg_i * q_i) + (1.0f - use_i) * p_rg;
+    const float p_fc = 1.0f / (1.0f + odds * p_bg);
     const float sh_chroma = dr * dr + dg * dg < r2 ? 1.0f : 0.0f;
     const float sh_lo = ix >= lo * mix ? 1.0f : 0.0f;
     const float sh_hi = ix <= hi * mix ? 1.0f : 0.0f;
     const float sh = sh_chroma * sh_lo * sh_hi * (1.0f - d);
     const float f = outF + keepF * (1.0f - sh) * p_fc;
-    pf[x] = d * priorF + (1.0f - d) * f;
+    const float prior_if_dark = (1.0f - use_i) * d;  // without intensity, dark = no evidence
+    pf[x] = prior_if_dark * priorF + (1.0f - prior_if_dark) * f;
     dark[x] = d;
     shadow[x] = p_fc > 0.5f ? sh : 0.0f;  // counted only where the cylinder changed the call
   }
@@ -175,10 +212,11 @@ PSFS_ALWAYS_INLINE void skinComponentRow(const detail::SkinKernelTerm& t, int w,
 PSFS_ALWAYS_INLINE void outputRow(const RowConstants& k, int w, const float* __restrict pf,
                                   const float* __restrict ps, const float* __restrict dark,
                                   std::uint8_t* __restrict dst) {
-  const float odds = k.odds_skin, priorS = k.priorS, outS = k.outS, keepS = k.keepS;
+  const float odds = k.odds_skin, outS = k.outS, keepS = k.keepS;
+  const float dark_s = k.dark_skin;
   for (int x = 0; x < w; ++x) {
     const float p_sc = ps[x] / (ps[x] + odds);  // = p P(S) / (p P(S) + P(notS))
-    const float s = dark[x] * priorS + (1.0f - dark[x]) * (outS + keepS * p_sc);
+    const float s = dark[x] * dark_s + (1.0f - dark[x]) * (outS + keepS * p_sc);
     dst[2 * x + 0] = std::uint8_t(int(pf[x] * 255.0f + 0.5f));
     dst[2 * x + 1] = std::uint8_t(int(pf[x] * s * 255.0f + 0.5f));
   }
@@ -220,7 +258,7 @@ RowStats classifyRow(const RowConstants& k, const detail::SkinKernelTerm* terms,
   float* shadow = dark + w;
   kernels::rgbRowToRgI(src, w, r, g, in);
   foregroundRow(k, w, r, g, in, P.mean_r + o, P.mean_g + o, P.mean_intensity + o, P.scale_r + o,
-                P.scale_g + o, pf, dark, shadow);
+                P.scale_g + o, P.var_intensity + o, pf, dark, shadow);
   std::fill(ps, ps + w, 0.0f);
   for (int j = 0; j < K; ++j) skinComponentRow(terms[j], w, r, g, ps);
   outputRow(k, w, pf, ps, dark, dst);
@@ -257,6 +295,22 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
   k.lo = params_.shadow_min_intensity_ratio;
   k.hi = params_.shadow_max_intensity_ratio;
   k.min_i = params_.min_chroma_intensity;
+  k.use_i = params_.intensity_model ? 1.0f : 0.0f;
+  k.gain = 1.0f;
+  k.tol2 = params_.gain_tolerance * params_.gain_tolerance;
+  k.keep_n = 256.0f * (1.0f - params_.shadow_weight);
+  k.band_u = params_.intensity_model
+                 ? 256.0f * params_.shadow_weight /
+                       (params_.shadow_max_intensity_ratio - params_.shadow_min_intensity_ratio)
+                 : 0.0f;
+  k.dark_skin = params_.intensity_model ? k.outS : k.priorS;
+  // Per camera: its gain this frame.
+  std::vector<RowConstants> ks(cameras, k);
+  std::vector<double> gains(cameras, 1.0);
+  for (int c = 0; c < cameras; ++c) {
+    gains[c] = estimateGain(rgb[c], *bg[c]);
+    ks[c].gain = float(gains[c]);
+  }
   const detail::SkinKernelTerm* terms = skin_terms_.data();
   const int K = int(skin_terms_.size());
 
@@ -277,7 +331,7 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
       const int y = row - row_start[cam];
       const int w = rgb[cam].cols;
       row_stats[row] =
-          classifyRow(k, terms, K, rgb[cam].ptr<std::uint8_t>(y), w, bg[cam]->planes(),
+          classifyRow(ks[cam], terms, K, rgb[cam].ptr<std::uint8_t>(y), w, bg[cam]->planes(),
                       std::size_t(y) * std::size_t(w), scratch, out[cam].ptr<std::uint8_t>(y));
     }
   }
@@ -293,8 +347,60 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
       sum += row_stats[row].sum_foreground_bytes;
     }
     s.mean_foreground = s.pixels ? sum / (255.0 * s.pixels) : 0.0;
+    s.gain = gains[c];
     stats[c] = s;
   }
+}
+
+double PixelClassifier::estimateGain(const cv::Mat& rgb, const BackgroundModel& background) const {
+  if (!params_.intensity_model || !params_.gain_compensation) return 1.0;
+  checkRgb8(rgb, background.width(), background.height(), "pixel classifier (gain)");
+  const BackgroundPlanes P = background.planes();
+  // Background chroma: within twice the shadow cylinder (a shadow keeps the chroma, a person
+  // mostly does not), so the mode is the light's gain even with half the view occluded.
+  const float rad = 2.0f * std::max(params_.shadow_chroma_radius, 0.01f);
+  const float r2 = rad * rad;
+  const float min_i = std::max(params_.min_chroma_intensity, 1.0f);
+  std::vector<int> hist(kGainBins, 0);
+  int n = 0;
+  for (int y = 0; y < rgb.rows; y += 2) {
+    const std::uint8_t* src = rgb.ptr<std::uint8_t>(y);
+    const std::size_t row = std::size_t(y) * std::size_t(rgb.cols);
+    for (int x = 0; x < rgb.cols; x += 2) {
+      const float R = src[3 * x], G = src[3 * x + 1], B = src[3 * x + 2];
+      const float sum = R + G + B;
+      const float I = sum * (1.0f / 3.0f);
+      const float mi = P.mean_intensity[row + x];
+      if (I < min_i || I > kGainMaxIntensity || mi < kGainMinBackground) continue;
+      const float dr = R / sum - P.mean_r[row + x], dg = G / sum - P.mean_g[row + x];
+      if (dr * dr + dg * dg >= r2) continue;
+      const int bin = int(I / mi * float(kGainBinsPerUnit));
+      if (bin >= kGainBins) continue;
+      ++hist[bin];
+      ++n;
+    }
+  }
+  if (n < kGainMinSamples) return 1.0;
+  // Peaks over 5 bins (+-0.8 %, about the noise of a ratio): the lit background is one sharp
+  // peak, a person's background-coloured clothes spread over many ratios, and a cast shadow
+  // forms a second, darker peak that may be as large. Shadows only darken: the gain is the
+  // brightest peak that holds at least half as many pixels as the largest.
+  std::vector<int> window(kGainBins, 0);
+  int max_count = 0;
+  for (int b = 0; b < kGainBins; ++b) {
+    for (int j = std::max(0, b - 2); j <= std::min(kGainBins - 1, b + 2); ++j) window[b] += hist[j];
+    max_count = std::max(max_count, window[b]);
+  }
+  int best = 0;
+  for (int b = kGainBins - 1; b >= 0; --b)
+    if (2 * window[b] >= max_count) {
+      // The top of this peak: walk up while the window count grows.
+      best = b;
+      while (best > 0 && window[best - 1] > window[best]) --best;
+      break;
+    }
+  const double g = (best + 0.5) / kGainBinsPerUnit;
+  return std::min(kGainMax, std::max(kGainMin, g));
 }
 
 ClassificationStats PixelClassifier::classify(const cv::Mat& rgb, const BackgroundModel& background,
@@ -339,24 +445,41 @@ std::vector<ClassificationStats> PixelClassifier::classify(
 void PixelClassifier::classifyPixel(std::uint8_t R, std::uint8_t G, std::uint8_t B,
                                     const BackgroundModel& background, int x, int y,
                                     double* p_foreground, double* p_skin,
-                                    bool* suppressed_shadow) const {
+                                    bool* suppressed_shadow, double gain) const {
   const NormalizedRgI c = toNormalizedRgI(R, G, B);
   const double PF = priors_.foreground, PS = priors_.skin;
   const double pF = clampPrior(PF), pS = clampPrior(PS);
   const double eF = params_.foreground_outlier, eS = params_.skin_outlier;
+  const std::size_t i = std::size_t(y) * background.width() + x;
+  const BackgroundPlanes P = background.planes();
+  const double mi = gain * P.mean_intensity[i];
+  // 256 p(I|notF) of the intensity model (pixel_classifier.h).
+  auto intensityTerm = [&]() {
+    const double lo = params_.shadow_min_intensity_ratio, hi = params_.shadow_max_intensity_ratio;
+    const double w = params_.shadow_weight, tol = params_.gain_tolerance;
+    const double var = P.var_intensity[i] + tol * tol * mi * mi;
+    const double di = c.intensity - mi;
+    const double n = std::exp(-0.5 * di * di / var) / std::sqrt(2.0 * kPi * var);
+    const bool in_band = c.intensity >= lo * mi && c.intensity <= hi * mi;
+    return 256.0 * ((1.0 - w) * n + (in_band ? w / ((hi - lo) * std::max(mi, 1.0)) : 0.0));
+  };
   bool shadow = false;
   double f, s;
   if (c.intensity < params_.min_chroma_intensity) {
-    f = PF;
-    s = PS;
+    if (params_.intensity_model) {
+      const double p_bg = intensityTerm();  // the chroma is noise: rg densities cancel
+      f = eF * PF + (1.0 - eF) * pF / (pF + p_bg * (1.0 - pF));
+      s = eS * PS;  // near black: not skin (a dark sleeve is foreground, and must not be skin)
+    } else {
+      f = PF;
+      s = PS;
+    }
   } else {
-    const double p_bg = background.density(x, y, c.r, c.g);
+    double p_bg = background.density(x, y, c.r, c.g);
+    if (params_.intensity_model) p_bg *= intensityTerm();
     double p_fc = pF / (pF + p_bg * (1.0 - pF));
     if (params_.shadow_suppression) {
-      const std::size_t i = std::size_t(y) * background.width() + x;
-      const BackgroundPlanes P = background.planes();
       const double dr = c.r - P.mean_r[i], dg = c.g - P.mean_g[i];
-      const double mi = P.mean_intensity[i];
       const double rad = params_.shadow_chroma_radius;
       const bool inside = dr * dr + dg * dg < rad * rad &&
                           c.intensity >= double(params_.shadow_min_intensity_ratio) * mi &&
@@ -383,6 +506,7 @@ ClassificationStats PixelClassifier::classifyReference(const cv::Mat& rgb,
   likelihood.create(rgb.rows, rgb.cols, CV_8UC2);
   ClassificationStats st;
   st.pixels = rgb.rows * rgb.cols;
+  st.gain = estimateGain(rgb, background);
   double sum = 0.0;
   for (int y = 0; y < rgb.rows; ++y) {
     const std::uint8_t* src = rgb.ptr<std::uint8_t>(y);
@@ -391,7 +515,7 @@ ClassificationStats PixelClassifier::classifyReference(const cv::Mat& rgb,
       const std::uint8_t R = src[3 * x], G = src[3 * x + 1], B = src[3 * x + 2];
       double f, s;
       bool shadow;
-      classifyPixel(R, G, B, background, x, y, &f, &s, &shadow);
+      classifyPixel(R, G, B, background, x, y, &f, &s, &shadow, st.gain);
       dst[2 * x] = toByte(f);
       dst[2 * x + 1] = toByte(f * s);
       st.dark_pixels += toNormalizedRgI(R, G, B).intensity < params_.min_chroma_intensity;

@@ -30,7 +30,11 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
       .add("pixel_classifier/shadow_chroma_radius", &p.classifier.shadow_chroma_radius)
       .add("pixel_classifier/shadow_min_intensity_ratio", &p.classifier.shadow_min_intensity_ratio)
       .add("pixel_classifier/shadow_max_intensity_ratio", &p.classifier.shadow_max_intensity_ratio)
-      .add("pixel_classifier/min_chroma_intensity", &p.classifier.min_chroma_intensity);
+      .add("pixel_classifier/min_chroma_intensity", &p.classifier.min_chroma_intensity)
+      .add("pixel_classifier/intensity_model", &p.classifier.intensity_model)
+      .add("pixel_classifier/shadow_weight", &p.classifier.shadow_weight)
+      .add("pixel_classifier/gain_tolerance", &p.classifier.gain_tolerance)
+      .add("pixel_classifier/gain_compensation", &p.classifier.gain_compensation);
   s->add("background_model/learning_frames", &p.background.learning_frames)
       .add("background_model/learning_rate", &p.background.learning_rate)
       .add("background_model/min_sigma_rg", &p.background.min_sigma_rg)

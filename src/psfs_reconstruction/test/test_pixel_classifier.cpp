@@ -95,17 +95,24 @@ TEST(PixelClassifier, ShadowOnDeskStaysBackgroundObjectIsForeground) {
   const auto [f_desk, fs_desk] = at(lik, 5 * W / 6, H / 2);
   std::printf(
       "P'(F|c): desk %.3f, desk in 40%% shadow %.3f, object of equal brightness %.3f "
-      "(floor eF P(F) = %.4f); shadow pixels %d of %d\n",
-      f_desk, f_shadow, f_object, floor, stats.shadow_pixels, stats.pixels);
+      "(floor eF P(F) = %.4f); shadow pixels %d of %d; gain %.4f\n",
+      f_desk, f_shadow, f_object, floor, stats.shadow_pixels, stats.pixels, stats.gain);
   const double q = 0.5 / 255 + 1e-6;  // output quantisation
   EXPECT_NEAR(f_shadow, floor, q);
   EXPECT_NEAR(f_desk, floor, 0.01);
   EXPECT_GT(f_object, 0.95);
   EXPECT_LT(fs_object, 0.1);  // grey-green is not skin
-  // Same chroma: the Gaussian alone already calls the shadow background; the cylinder did not
-  // have to change anything.
-  EXPECT_EQ(stats.shadow_pixels, 0);
   EXPECT_LT(fs_shadow, 0.1);  // and no skin in a shadow either
+  // The rg model alone (the thesis'): the Gaussian already calls the shadow background, the
+  // cylinder did not have to change anything. With the intensity model the shadow's intensity
+  // is far from the desk's Gaussian and only the band's uniform share explains it, so there
+  // the cylinder is what keeps it background (above).
+  PixelClassifierParams rg_only;
+  rg_only.intensity_model = false;
+  PixelClassifier cls_rg(skinModel(), rg_only, rigPriors());
+  const auto stats_rg = cls_rg.classify(img, bg, lik);
+  EXPECT_NEAR(at(lik, W / 6, H / 2).first, floor, q);
+  EXPECT_EQ(stats_rg.shadow_pixels, 0);
 }
 
 TEST(PixelClassifier, ShadowCylinderRemovesTintedShadows) {
@@ -118,19 +125,20 @@ TEST(PixelClassifier, ShadowCylinderRemovesTintedShadows) {
   PixelClassifier cls(skinModel(), params, rigPriors());
   const double floor = params.foreground_outlier * cls.priors().foreground;
   const Rgb tinted = {113, 99, 78};  // I/I_bg = 0.60; r 0.3897 vs 0.4141, g 0.3414 vs 0.3416
-  const Rgb deep = {51, 44, 35};     // similar tint, I/I_bg = 0.27 < 0.4: outside the cylinder
-  const cv::Mat img = psfs_test::bandScene(W, H, {tinted, deep});
+  const Rgb deep = {25, 22, 17};     // similar tint, I/I_bg = 0.13 < 0.2: outside the cylinder
+  // The lit desk fills half the view (a view all in shadow is a global light change).
+  const cv::Mat img = psfs_test::bandScene(W, H, {tinted, deep, desk, desk});
   cv::Mat lik;
   const auto stats = cls.classify(img, bg, lik);
-  const double f_tinted = at(lik, W / 4, H / 2).first, f_deep = at(lik, 3 * W / 4, H / 2).first;
-  EXPECT_EQ(stats.shadow_pixels, W * H / 2);  // exactly the tinted band was suppressed
+  const double f_tinted = at(lik, W / 8, H / 2).first, f_deep = at(lik, 3 * W / 8, H / 2).first;
+  EXPECT_EQ(stats.shadow_pixels, W * H / 4);  // exactly the tinted band was suppressed
   params.shadow_suppression = false;
   cls.setParams(params);
   cls.classify(img, bg, lik);
-  const double f_tinted_off = at(lik, W / 4, H / 2).first;
+  const double f_tinted_off = at(lik, W / 8, H / 2).first;
   std::printf(
       "tinted shadow: P'(F|c) %.3f with the cylinder, %.3f without; too deep a shadow "
-      "(ratio 0.27): %.3f\n",
+      "(ratio 0.13): %.3f\n",
       f_tinted, f_tinted_off, f_deep);
   EXPECT_NEAR(f_tinted, floor, 0.5 / 255 + 1e-6);
   EXPECT_GT(f_tinted_off, 0.95);
@@ -182,13 +190,27 @@ TEST(PixelClassifier, OutlierModelBoundsAndNoNaN) {
     EXPECT_EQ(bad, 0);
   }
 
-  // Black has no chroma: both terms fall back to the priors. Saturated white is a valid grey.
+  // Black has no chroma. With the intensity model, black against the brighter office is
+  // foreground and not skin (P'(S|c) = eS P(S)); with rg alone both terms fall back to the
+  // priors. Saturated white is a valid grey.
   PixelClassifier cls(skinModel(), {}, rigPriors());
   const ClassPriors p = cls.priors();
+  const double eS = cls.params().skin_outlier;
   cv::Mat lik;
   const auto stats = cls.classify(img, bg, lik);
-  EXPECT_EQ(lik.at<cv::Vec2b>(10, 10)[0], std::lround(255 * p.foreground));
-  EXPECT_EQ(lik.at<cv::Vec2b>(10, 10)[1], std::lround(255 * p.foreground * p.skin));
+  double f_black, s_black;
+  cls.classifyPixel(0, 0, 0, bg, 10, 10, &f_black, &s_black, nullptr, stats.gain);
+  EXPECT_GT(f_black, 0.9);
+  EXPECT_NEAR(s_black, eS * p.skin, 1e-12);
+  EXPECT_NEAR(lik.at<cv::Vec2b>(10, 10)[0] / 255.0, f_black, 0.5 / 255 + 1e-6);
+  EXPECT_NEAR(lik.at<cv::Vec2b>(10, 10)[1] / 255.0, f_black * s_black, 0.5 / 255 + 1e-6);
+  PixelClassifierParams rg_only;
+  rg_only.intensity_model = false;
+  PixelClassifier cls_rg(skinModel(), rg_only, rigPriors());
+  cv::Mat lik_rg;
+  cls_rg.classify(img, bg, lik_rg);
+  EXPECT_EQ(lik_rg.at<cv::Vec2b>(10, 10)[0], std::lround(255 * p.foreground));
+  EXPECT_EQ(lik_rg.at<cv::Vec2b>(10, 10)[1], std::lround(255 * p.foreground * p.skin));
   double f_white, s_white;
   cls.classifyPixel(255, 255, 255, bg, 50, 10, &f_white, &s_white);
   EXPECT_TRUE(std::isfinite(f_white) && std::isfinite(s_white));
@@ -197,12 +219,83 @@ TEST(PixelClassifier, OutlierModelBoundsAndNoNaN) {
   EXPECT_GE(stats.saturated_pixels, 40 * 40);
 }
 
+TEST(PixelClassifier, IntensitySeparatesGreyClothesFromAGreyWall) {
+  // Normalised rg cannot tell achromatic clothes from an achromatic wall: a white shirt (1.6x
+  // the wall's intensity) and a charcoal one (0.12x) have the wall's chroma. Their intensity,
+  // outside the shadow/highlight band [0.2, 1.25], makes them foreground; the wall in a shadow
+  // of 0.5 stays background (the cylinder), and so does the lit wall.
+  const Rgb wall = {120, 120, 125};
+  const BackgroundModel bg = learn(uniform(wall), 1.5, 41);
+  const Rgb white = {195, 195, 202}, charcoal = {14, 14, 15}, shade = {60, 60, 62};
+  const cv::Mat img = psfs_test::bandScene(W, H, {white, charcoal, shade, wall, wall, wall});
+  auto run = [&](bool intensity, double out[4]) {
+    PixelClassifierParams params;
+    params.intensity_model = intensity;
+    PixelClassifier cls(skinModel(), params, rigPriors());
+    cv::Mat lik;
+    cls.classify(img, bg, lik);
+    for (int band = 0; band < 4; ++band) out[band] = at(lik, (2 * band + 1) * W / 12, H / 2).first;
+  };
+  double with_i[4], rg_only[4];
+  run(true, with_i);
+  run(false, rg_only);
+  std::printf(
+      "P'(F|c) intensity model / rg only: white shirt %.3f / %.3f, charcoal %.3f / %.3f, "
+      "wall in shadow %.3f / %.3f, wall %.3f / %.3f\n",
+      with_i[0], rg_only[0], with_i[1], rg_only[1], with_i[2], rg_only[2], with_i[3], rg_only[3]);
+  EXPECT_GT(with_i[0], 0.95);
+  EXPECT_GT(with_i[1], 0.95);
+  EXPECT_LT(with_i[2], 0.05);
+  EXPECT_LT(with_i[3], 0.05);
+  EXPECT_LT(rg_only[0], 0.5);  // what the thesis' model misses
+  EXPECT_LT(rg_only[1], 0.8);  // near black: the prior at best
+}
+
+TEST(PixelClassifier, GlobalLightChangeIsDividedOut) {
+  // The light rises by 40 % (a lamp switched on, an exposure step) while a person in a blue
+  // shirt fills 30 % of the view. Without the gain the whole wall is brighter than any
+  // highlight the band accepts (1.25); with it the wall stays background, the shirt foreground.
+  cv::Mat office;  // a dim office (channels <= 132), so that 1.4x saturates nothing
+  psfs_test::officeBackground(W, H, 6).convertTo(office, -1, 0.6);
+  const BackgroundModel bg = learn(office, 1.5, 42);
+  std::mt19937_64 rng(43);
+  cv::Mat img;
+  office.convertTo(img, -1, 1.4);
+  img(cv::Rect(0, 0, W * 3 / 10, H)).setTo(cv::Scalar(40, 60, 150));
+  img = psfs_test::addNoise(img, 1.5, rng);
+  PixelClassifier cls(skinModel(), {}, rigPriors());
+  cv::Mat lik;
+  const auto st = cls.classify(img, bg, lik);
+  const cv::Mat f = [&] { cv::Mat ch[2]; cv::split(lik, ch); return ch[0]; }();
+  const double wall_fg = cv::countNonZero(f(cv::Rect(W / 2, 0, W / 2, H)) > 127) / double(W / 2 * H);
+  const double shirt_fg = cv::countNonZero(f(cv::Rect(0, 0, W / 4, H)) > 127) / double(W / 4 * H);
+  PixelClassifierParams no_gain;
+  no_gain.gain_compensation = false;
+  cls.setParams(no_gain);
+  cv::Mat lik_ng;
+  cls.classify(img, bg, lik_ng);
+  const cv::Mat f_ng = [&] { cv::Mat ch[2]; cv::split(lik_ng, ch); return ch[0]; }();
+  const double wall_fg_ng =
+      cv::countNonZero(f_ng(cv::Rect(W / 2, 0, W / 2, H)) > 127) / double(W / 2 * H);
+  std::printf("gain %.4f (true 1.4); wall called foreground: %.4f with the gain, %.4f without; "
+              "shirt %.4f\n", st.gain, wall_fg, wall_fg_ng, shirt_fg);
+  // The histogram's step is 1/256; the 8-bit rounding of 1.4 x I moves the ratio by < 0.5 %
+  EXPECT_NEAR(st.gain, 1.4, 0.01);
+  EXPECT_LT(wall_fg, 0.01);
+  EXPECT_GT(shirt_fg, 0.99);
+  EXPECT_GT(wall_fg_ng, 0.5);
+}
+
 TEST(PixelClassifier, DegenerateFramesGiveNeutralOrValidOutput) {
   const BackgroundModel bg = learn(psfs_test::officeBackground(W, H, 5), 2.0, 13);
-  PixelClassifier cls(skinModel(), {}, rigPriors());
+  // The rg model (thesis): a covered lens / camera off, all black, carries no information
+  // anywhere (priors: a neutral view). With the intensity model it is a dark object filling
+  // the view; the reconstructor switches such a view off (test_reconstructor, covered lens).
+  PixelClassifierParams rg_only;
+  rg_only.intensity_model = false;
+  PixelClassifier cls(skinModel(), rg_only, rigPriors());
   const ClassPriors p = cls.priors();
   cv::Mat lik;
-  // Covered lens / camera off: all black -> no information anywhere (priors: neutral view).
   auto st = cls.classify(uniform({0, 0, 0}), bg, lik);
   EXPECT_EQ(st.darkFraction(), 1.0);
   double lo, hi;
@@ -259,8 +352,18 @@ TEST(PixelClassifier, SkinChannelHighOnSkinLowOnShirts) {
       EXPECT_LT(fs, 0.5 * prior_fs) << cases[i].name;
     }
   }
-  // A pixel too dark for chroma gets the priors (a neutral view), never "skin".
-  cls.classify(uniform({3, 3, 4}), bg, lik);
+  // A pixel too dark for chroma, against the brighter wall: foreground by its intensity and
+  // never skin (P'(S|c) = eS P(S)); the rg model gives it the priors (a neutral view).
+  const auto dark_stats = cls.classify(uniform({3, 3, 4}), bg, lik);
+  double f_dark, s_dark;
+  cls.classifyPixel(3, 3, 4, bg, 5, 5, &f_dark, &s_dark, nullptr, dark_stats.gain);
+  EXPECT_GT(at(lik, 5, 5).first, 0.9);
+  EXPECT_NEAR(at(lik, 5, 5).second, f_dark * cls.params().skin_outlier * cls.priors().skin,
+              0.5 / 255 + 1e-6);
+  PixelClassifierParams rg_only;
+  rg_only.intensity_model = false;
+  PixelClassifier cls_rg(skinModel(), rg_only, rigPriors());
+  cls_rg.classify(uniform({3, 3, 4}), bg, lik);
   EXPECT_NEAR(at(lik, 5, 5).second, prior_fs, 0.5 / 255 + 1e-6);
   // The wall itself: not foreground, not skin.
   cls.classify(uniform(wall), bg, lik);

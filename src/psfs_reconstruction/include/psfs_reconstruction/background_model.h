@@ -62,6 +62,7 @@ struct BackgroundPlanes {
   // 1 / (2 pi sigma_r sigma_g), so no log/sqrt is needed per pixel at classification time.
   const float* scale_r = nullptr;
   const float* scale_g = nullptr;
+  const float* var_intensity = nullptr;  // variance of I (8-bit levels squared)
 };
 
 class BackgroundModel {

@@ -10,8 +10,11 @@
 //            < shadow_chroma_radius and I / I_bg in [min, max]) P(F|c) = 0 (shadow/highlight)
 //   outliers (Minka 2003): P'(F|c) = eF P(F) + (1-eF) P(F|c), P'(S|c) = eS P(S) + (1-eS) P(S|c)
 //   P'(F,S|c) = P'(F|c) P'(S|c)
-// Pixels too dark to have a chroma (I < min_chroma_intensity) carry no information: they get
-// the priors, P'(F|c) = P(F) and P'(S|c) = P(S), which the fusion treats as a neutral view.
+// Pixels too dark to have a chroma (I < min_chroma_intensity) carry no colour information:
+// P'(F|c) = P(F), P'(S|c) = P(S) (a neutral view for the fusion), unless the intensity model
+// is on: then P'(F|c) comes from intensity alone and P'(S|c) = eS P(S), since near-black is
+// not skin (a black sleeve, certainly foreground, would otherwise vote for the skin hull in
+// every view at the prior's P(S)).
 //
 // Speed (DESIGN.md section 6: 8 x 320x240 in <= 2 ms on 2 cores): one pass over each row with
 // row-local float buffers; every inner loop is branch-free float arithmetic that GCC
@@ -61,25 +64,50 @@ struct PixelClassifierParams {
   bool shadow_suppression = true;
   float shadow_chroma_radius = 0.02f;
   // Intensity ratio I / I_bg (dimensionless) accepted as shadow (< 1) or highlight (> 1).
-  // 0.4 still accepts a shadow that removes 60 % of the light; 1.25 a mild highlight.
-  // The thesis chose its cylinder empirically and does not publish the values.
-  float shadow_min_intensity_ratio = 0.4f;
+  // The darkest cast shadow keeps only the ambient share of the light, 0.2-0.4 in the
+  // scenario generator's rooms (and in offices): 0.2 accepts it. 1.25 accepts a mild
+  // highlight. The thesis chose its cylinder empirically and does not publish the values.
+  // (0.4 before the intensity model: the hands' shadows on a beige desk, darker than that,
+  // then became skin-coloured foreground and grew the hand meshes by 2-8 mm.)
+  float shadow_min_intensity_ratio = 0.2f;
   float shadow_max_intensity_ratio = 1.25f;
   // Below this intensity (8-bit levels, I = (R+G+B)/3) chroma is noise: with 2 levels of
   // sensor noise per channel, r has a standard deviation of ~0.1 at I = 6.
   float min_chroma_intensity = 6.0f;
+  // Intensity in the background likelihood (not in the thesis, which uses rg alone):
+  //   p(c|notF) = p(rg|notF) p(I|notF),  p(c|F) = 1 per unit rg area x 1/256 per level,
+  //   p(I|notF) = (1 - w) N(I; g I_bg, var_I + (t g I_bg)^2) + w U(I; [min, max] g I_bg)
+  // with w = shadow_weight, t = gain_tolerance, [min, max] the shadow ratios above and g the
+  // camera's gain this frame (below). Normalised rg cannot tell a grey, white or black shirt
+  // from a grey wall, nor a dark sleeve from a dark desk; intensity can, once the light's
+  // global changes (exposure steps, drift, flicker, a lamp switched on) are divided out.
+  // Pixels too dark for a chroma then keep the intensity evidence (dark on a bright
+  // background is foreground) instead of getting the priors. false: the thesis' rg model.
+  bool intensity_model = true;
+  // Share of the background's intensity density spread uniformly over the shadow/highlight
+  // band (dimensionless, [0, 1)): cast shadows darken the desk without changing its chroma.
+  float shadow_weight = 0.2f;
+  // Standard deviation of the background intensity that the global gain does not explain
+  // (vignetting changes, local light), as a fraction of I_bg (dimensionless).
+  float gain_tolerance = 0.05f;
+  // Per frame and camera, divide out a global gain g = the brightest major peak of I / I_bg
+  // (estimateGain) over the pixels
+  // whose chroma is still the background's (sampled on every 2nd row and column). Needs
+  // intensity_model; false: g = 1.
+  bool gain_compensation = true;
 };
 
 // What the classifier saw in one image: lets the nodelet report degraded input (a camera
 // that is covered, off or overexposed) in its diagnostics without a second pass.
 struct ClassificationStats {
   int pixels = 0;
-  int dark_pixels = 0;       // I < min_chroma_intensity (got the priors)
+  int dark_pixels = 0;       // I < min_chroma_intensity (no chroma: see the class comment)
   int saturated_pixels = 0;  // at least one channel at 255 (chroma may be clipped)
   // Inside the shadow cylinder where the background Gaussian alone would have said foreground
   // (P(F|c) > 0.5): the shadows and highlights the cylinder removed.
   int shadow_pixels = 0;
   double mean_foreground = 0.0;  // mean P'(F|c) (of the quantised channel 0)
+  double gain = 1.0;             // the global gain g divided out (1 without compensation)
   double darkFraction() const { return pixels ? double(dark_pixels) / pixels : 0.0; }
   double saturatedFraction() const { return pixels ? double(saturated_pixels) / pixels : 0.0; }
 };
@@ -128,9 +156,19 @@ class PixelClassifier {
                                         cv::Mat& likelihood) const;
 
   // P'(F|c), P'(S|c) of one pixel (reference path, double): for tests and tools.
+  // gain: the camera's global gain this frame (estimateGain).
   void classifyPixel(std::uint8_t R, std::uint8_t G, std::uint8_t B,
                      const BackgroundModel& background, int x, int y, double* p_foreground,
-                     double* p_skin, bool* suppressed_shadow = nullptr) const;
+                     double* p_skin, bool* suppressed_shadow = nullptr, double gain = 1.0) const;
+
+  // The global gain g of an rgb8 image against its background (PixelClassifierParams::
+  // gain_compensation): the brightest peak of I / I_bg holding at least half as many pixels
+  // as the largest (histogram in steps of 1/256, counted over 5 steps; a shadow may be as
+  // large as the lit background, but is darker) over every 2nd row and column, taking only pixels of
+  // background chroma (within twice the shadow cylinder's radius) that are neither dark nor
+  // saturated, clamped to [0.25, 4]. 1 when compensation is off or fewer than 64 pixels
+  // qualify. Deterministic (an integer histogram).
+  double estimateGain(const cv::Mat& rgb, const BackgroundModel& background) const;
 
  private:
   void rebuild();

@@ -160,6 +160,10 @@ class Reconstructor {
   void loadBackground(const std::string& directory,
                       const std::vector<tabletop_capture::CameraModel>& cameras);
 
+  // The likelihood images of the last reconstructed frame set, one CV_8UC2 per camera
+  // (pixel_classifier.h: P'(F|c), P'(F,S|c)); for tools and diagnostics.
+  const std::vector<cv::Mat>& lastLikelihoods() const { return likelihoods_; }
+
   // The back-projection of a volume into each camera (255 = some voxel above threshold_byte
   // lands within the voxel's footprint + margin_px), using this reconstructor's cameras and the
   // volume's own grid. What the background update uses when no masks are supplied.
