@@ -75,8 +75,11 @@ void MpfParams::validate() const {
   positiveBox(hand_centroid_box, "hand_centroid_box");
   positiveBox(head_centroid_box, "head_centroid_box");
   unit(hand_centroid_threshold, "hand_centroid_threshold");
+  nonNegative(hand_distal_length, "hand_distal_length");
+  nonNegative(hand_arm_box, "hand_arm_box");
   unit(head_centroid_threshold, "head_centroid_threshold");
   if (centroid_iterations < 1) fail("centroid_iterations", "must be >= 1");
+  head_fit.validate();
   if (threads < 0) fail("threads", "must be >= 0");
 }
 

@@ -271,6 +271,10 @@ void MpfTracker::updateReportedEstimates() {
     const bool refine = c.type == Target::kHand ? params_.refine_hand_centroid
                                                 : params_.refine_head_centroid;
     c.reported = refine ? refineCentroid(s) : c.estimate;
+    if (c.type == Target::kHead && params_.head_model && body_) {
+      const HeadFit fit = fitHeadCentre(*body_, c.reported, params_.head_fit);
+      if (fit.ok) c.reported = fit.centre;
+    }
   }
 }
 

@@ -8,7 +8,9 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
+#include "hand_tracking/distal_centroid.h"
 #include "hand_tracking/resampling.h"
 
 namespace hand_tracking {
@@ -352,21 +354,27 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
   const bool hand = c.type == Target::kHand;
   const Eigen::Vector3d half =
       0.5 * (hand ? params_.hand_centroid_box : params_.head_centroid_box);
+  // The distal cut looks at the arm in a larger box (it must see more than a hand to tell an
+  // arm); the plain centroid stays in the hand-sized one.
+  const bool distal = hand && params_.hand_distal_length > 0.0 && comps_[kHeadSlot].active;
+  const Eigen::Vector3d gather_half =
+      distal ? half.cwiseMax(Eigen::Vector3d::Constant(0.5 * params_.hand_arm_box)) : half;
   const double threshold = hand ? params_.hand_centroid_threshold : params_.head_centroid_threshold;
   const uint8_t thr = static_cast<uint8_t>(std::floor(255.0 * threshold));
   Eigen::Vector3d centre = c.estimate;
   for (int it = 0; it < params_.centroid_iterations; ++it) {
     Eigen::Vector3i lo, hi;
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(0, static_cast<int>(std::ceil((centre[a] - half[a] - g.origin[a]) /
+      lo[a] = std::max(0, static_cast<int>(std::ceil((centre[a] - gather_half[a] - g.origin[a]) /
                                                      g.voxel_size - 0.5)));
-      hi[a] = std::min(g.dims[a], static_cast<int>(std::floor((centre[a] + half[a] -
+      hi[a] = std::min(g.dims[a], static_cast<int>(std::floor((centre[a] + gather_half[a] -
                                                                g.origin[a]) / g.voxel_size -
                                                               0.5)) + 1);
       if (hi[a] <= lo[a]) return centre;
     }
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    double mass = 0.0;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), arm_sum = Eigen::Vector3d::Zero();
+    double mass = 0.0, arm_mass = 0.0;
+    std::vector<WeightedPoint> voxels;  // the larger box's, for the distal cut
     for (int z = lo.z(); z < hi.z(); ++z)
       for (int y = lo.y(); y < hi.y(); ++y) {
         const uint8_t* row = skin_->data.data() + g.index(0, y, z);
@@ -381,10 +389,25 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
             if (t != s && comps_[t].active && (p - comps_[t].estimate).squaredNorm() < d)
               mine = false;
           if (!mine) continue;
+          if (distal) {
+            voxels.emplace_back(p, double(v));
+            arm_sum += v * p;
+            arm_mass += v;
+          }
+          if (((p - centre).cwiseAbs() - half).maxCoeff() > 0.0) continue;  // outside the box
           sum += v * p;
           mass += v;
         }
       }
+    if (distal && arm_mass > 0.0) {
+      const Eigen::Vector3d arm_centroid = arm_sum / arm_mass;
+      const Eigen::Vector3d end = distalCentroid(voxels, arm_centroid, comps_[kHeadSlot].estimate,
+                                                 params_.hand_distal_length);
+      if (end != arm_centroid) {  // an arm: its far end
+        centre = end;
+        continue;
+      }
+    }
     if (!(mass > 0.0)) return centre;
     centre = sum / mass;
   }
@@ -414,6 +437,7 @@ const std::vector<Target>& MpfTracker::update(const psfs::ProbabilityVolume& ski
   const Clock::time_point t0 = Clock::now();
   stats_ = Stats();
   skin_ = &skin;
+  body_ = &body;
   skin_iv_.build(skin);
   body_iv_.build(body);
   times_.integral_ms = msSince(t0);
@@ -433,6 +457,7 @@ const std::vector<Target>& MpfTracker::update(const psfs::ProbabilityVolume& ski
   reconfigure();
   publish();
   skin_ = nullptr;
+  body_ = nullptr;
   times_.reconfigure_ms = msSince(t2);
   times_.total_ms = msSince(t0);
   return targets_;

@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 
+#include "hand_tracking/head_model.h"
+
 namespace hand_tracking {
 
 struct MpfParams {
@@ -111,6 +113,16 @@ struct MpfParams {
   bool refine_hand_centroid = true;
   Eigen::Vector3d hand_centroid_box{0.20, 0.20, 0.20};
   double hand_centroid_threshold = 0.6;
+  // Distal cut of that centroid (m, 0 = off; distal_centroid.h): with short or rolled sleeves
+  // the forearm is skin as well, and the box's centroid slid 9-18 cm down the arm on generated
+  // scenarios. When the skin in the larger hand_arm_box is elongated and longer than this plus
+  // the hull's smear, the centroid of the voxels within this length of its end away from the
+  // head is reported instead (needs a tracked head). A hand is 16-21 cm from wrist to finger
+  // tips; 0.17 m keeps an open hand whole and drops most of the forearm.
+  double hand_distal_length = 0.17;
+  // Edge (m) of the box, centred like the one above, in which the distal cut looks for an arm:
+  // it must hold more than a hand with the hull's smear (0.17 + 0.05 m) along a diagonal arm.
+  double hand_arm_box = 0.32;
   // Head: a head-sized box and every voxel (the hull's fringe around the face reaches into the
   // hair and balances the face towards the head's centre). On the simulated rig it leaves the
   // mean error as it is and halves the worst case (the particle mean follows the face as the
@@ -119,6 +131,10 @@ struct MpfParams {
   Eigen::Vector3d head_centroid_box{0.20, 0.20, 0.20};
   double head_centroid_threshold = 0.0;
   int centroid_iterations = 3;
+  // Head model (head_model.h): report the head's centre fitted in the body volume around the
+  // face estimate above (a fit that fails reports the face estimate). false: the face estimate.
+  bool head_model = true;
+  HeadModelParams head_fit;
 
   // OpenMP threads for the particle weights (0 = OpenMP default). A second thread gains little
   // (see docs/benchmarks.md (bench_mpf)): the serial prediction and the integral volumes

@@ -169,6 +169,7 @@ class MpfTracker {
   std::mt19937_64 rng_;
   IntegralVolume skin_iv_, body_iv_;
   const psfs::ProbabilityVolume* skin_ = nullptr;  // valid during update() only
+  const psfs::ProbabilityVolume* body_ = nullptr;  // valid during update() only
   std::vector<P> parts_, next_;
   Component comps_[kNumSlots];
   std::vector<Target> targets_;

@@ -1,0 +1,25 @@
+// The hand at the far end of a skin blob. With short or rolled sleeves the forearm is skin as
+// well, and the skin centroid around a hand slides down the arm (9-18 cm on generated
+// scenarios). The hand is the end of the arm away from the body: when the skin voxels are
+// elongated (their long axis' variance > 2.25x the next one's, i.e. 1.5x the spread: a flat
+// open hand alone is about 19 x 9 cm, 1.4:1 in spread at 16 mm voxels) and longer than
+// `length` + 5 cm along that axis (the hull smears a hand by about 3 voxels at 16 mm: a hand
+// alone in long sleeves must not be cut), only the voxels within `length` of the end pointing away from
+// `head` count, and their weighted centroid is returned; otherwise `centroid` unchanged.
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace hand_tracking {
+
+using WeightedPoint = std::pair<Eigen::Vector3d, double>;  // position (m), weight >= 0
+
+// centroid: the weighted centroid of `voxels`; head: a point on the body side (the head).
+Eigen::Vector3d distalCentroid(const std::vector<WeightedPoint>& voxels,
+                               const Eigen::Vector3d& centroid, const Eigen::Vector3d& head,
+                               double length);
+
+}  // namespace hand_tracking

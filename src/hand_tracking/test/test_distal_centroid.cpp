@@ -1,0 +1,76 @@
+// Distal centroid: the hand at the far end of a bare forearm, on synthetic skin voxels at the
+// tracker's 16 mm spacing.
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "hand_tracking/distal_centroid.h"
+
+namespace {
+
+using hand_tracking::distalCentroid;
+using hand_tracking::WeightedPoint;
+using Eigen::Vector3d;
+
+constexpr double kVoxel = 1.0 / 64;
+
+// Voxels of a box [min, max] on the 16 mm lattice, weight 1.
+void addBox(const Vector3d& min, const Vector3d& max, std::vector<WeightedPoint>* out) {
+  for (double z = min.z(); z <= max.z(); z += kVoxel)
+    for (double y = min.y(); y <= max.y(); y += kVoxel)
+      for (double x = min.x(); x <= max.x(); x += kVoxel) out->emplace_back(Vector3d(x, y, z), 1.0);
+}
+
+Vector3d centroidOf(const std::vector<WeightedPoint>& v) {
+  Vector3d s = Vector3d::Zero();
+  double w = 0;
+  for (const auto& [p, m] : v) s += m * p, w += m;
+  return s / w;
+}
+
+}  // namespace
+
+TEST(DistalCentroid, BareForearmGivesTheHandEnd) {
+  // A forearm reaching from the body (y = -0.30) to the wrist (y = -0.05) and a hand from
+  // there to the finger tips (y = +0.13), head far behind. The answer must lie near the hand's
+  // centre (y = +0.04): within half the cut's leftover forearm (0.17 - 0.18 m of hand: none)
+  // plus a voxel.
+  std::vector<WeightedPoint> skin;
+  addBox(Vector3d(0.10, -0.30, 0.10), Vector3d(0.14, -0.05, 0.14), &skin);  // forearm, 4 cm thick
+  addBox(Vector3d(0.08, -0.05, 0.10), Vector3d(0.16, 0.13, 0.13), &skin);   // hand, 8 cm wide
+  std::vector<WeightedPoint> hand_only;
+  addBox(Vector3d(0.08, -0.05, 0.10), Vector3d(0.16, 0.13, 0.13), &hand_only);
+  const Vector3d head(0.0, -0.40, 0.55);
+  const Vector3d c = centroidOf(skin), truth = centroidOf(hand_only);
+  const Vector3d d = distalCentroid(skin, c, head, 0.17);
+  std::printf("plain centroid %.1f mm from the hand's, distal %.1f mm\n", 1e3 * (c - truth).norm(),
+              1e3 * (d - truth).norm());
+  EXPECT_GT((c - truth).norm(), 0.05);
+  EXPECT_LT((d - truth).norm(), 0.02);
+}
+
+TEST(DistalCentroid, HandAloneOrCompactBlobIsUnchanged) {
+  // Long sleeves: only the hand is skin. It is elongated but no longer than the cut.
+  std::vector<WeightedPoint> hand;
+  addBox(Vector3d(0.08, -0.05, 0.10), Vector3d(0.16, 0.11, 0.13), &hand);
+  const Vector3d c = centroidOf(hand);
+  EXPECT_EQ(distalCentroid(hand, c, Vector3d(0, -0.4, 0.55), 0.17), c);
+  // A fist: compact, not elongated.
+  std::vector<WeightedPoint> fist;
+  addBox(Vector3d(0.08, 0.0, 0.10), Vector3d(0.17, 0.09, 0.18), &fist);
+  const Vector3d f = centroidOf(fist);
+  EXPECT_EQ(distalCentroid(fist, f, Vector3d(0, -0.4, 0.55), 0.17), f);
+  // Nothing at all.
+  EXPECT_EQ(distalCentroid({}, f, Vector3d(0, -0.4, 0.55), 0.17), f);
+}
+
+TEST(DistalCentroid, TheEndAwayFromTheHeadWins) {
+  // The same arm seen with the head on the other side: the cut keeps the other end.
+  std::vector<WeightedPoint> arm;
+  addBox(Vector3d(0.10, -0.30, 0.10), Vector3d(0.14, 0.10, 0.14), &arm);
+  const Vector3d c = centroidOf(arm);
+  const Vector3d towards_plus_y = distalCentroid(arm, c, Vector3d(0.1, -0.6, 0.3), 0.17);
+  const Vector3d towards_minus_y = distalCentroid(arm, c, Vector3d(0.1, 0.4, 0.3), 0.17);
+  EXPECT_GT(towards_plus_y.y(), c.y() + 0.08);
+  EXPECT_LT(towards_minus_y.y(), c.y() - 0.08);
+}
