@@ -80,29 +80,20 @@ void setCounters(benchmark::State& state) {
 }
 
 // The classifier as the pipeline runs it: all 8 images in one OpenMP loop over their rows.
-void BM_Classify8(benchmark::State& state) {
+void classify8(benchmark::State& state, const psfs::PixelClassifier& classifier) {
   Rig& r = rig();
   const int threads = int(state.range(0));
   std::vector<cv::Mat> out;
   for (auto _ : state) {
-    r.classifier.classify(r.frames, r.bg_ptrs, out, threads);
+    classifier.classify(r.frames, r.bg_ptrs, out, threads);
     benchmark::DoNotOptimize(out.data());
   }
   setCounters(state);
 }
+void BM_Classify8(benchmark::State& state) { classify8(state, rig().classifier); }
 BENCHMARK(BM_Classify8)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
-
 // Same-run baseline: the thesis' rg-only classifier (PixelClassifierParams::intensity_model off).
-void BM_Classify8RgOnly(benchmark::State& state) {
-  Rig& r = rig();
-  const int threads = int(state.range(0));
-  std::vector<cv::Mat> out;
-  for (auto _ : state) {
-    r.classifier_rg.classify(r.frames, r.bg_ptrs, out, threads);
-    benchmark::DoNotOptimize(out.data());
-  }
-  setCounters(state);
-}
+void BM_Classify8RgOnly(benchmark::State& state) { classify8(state, rig().classifier_rg); }
 BENCHMARK(BM_Classify8RgOnly)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 // Baseline: plain per-pixel implementation, double precision, std::exp, no vectorisation,
