@@ -7,11 +7,13 @@
 namespace hand_tracking {
 namespace {
 constexpr double kHullSmear = 0.05;  // m
+constexpr double kRamp = 0.05;       // m of extent over which a blob becomes fully an arm
 }  // namespace
 
 Eigen::Vector3d distalCentroid(const std::vector<WeightedPoint>& voxels,
                                const Eigen::Vector3d& centroid, const Eigen::Vector3d& head,
-                               double length) {
+                               double length, double* arm_weight) {
+  if (arm_weight) *arm_weight = 0.0;
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   double mass = 0.0;
   for (const auto& [p, w] : voxels) {
@@ -23,8 +25,10 @@ Eigen::Vector3d distalCentroid(const std::vector<WeightedPoint>& voxels,
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / mass);
   const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
   // Elongated: the long axis' spread at least 1.5x the next one's (a flat open hand is about
-  // 19 x 9 cm; its 2.1:1 in extent is 1.4:1 in standard deviation at 16 mm voxels).
+  // 19 x 9 cm; its 2.1:1 in extent is 1.4:1 in standard deviation at 16 mm voxels), fully an
+  // arm from 1.7x (variance ratio 3).
   if (!(ev[2] > 2.25 * ev[1])) return centroid;
+  const double elongation = std::min(1.0, (ev[2] / ev[1] - 2.25) / 0.75);
   Eigen::Vector3d axis = eig.eigenvectors().col(2);
   if (axis.dot(centroid - head) < 0.0) axis = -axis;  // pointing away from the head
   double t_max = -1e9, t_min = 1e9;
@@ -36,6 +40,8 @@ Eigen::Vector3d distalCentroid(const std::vector<WeightedPoint>& voxels,
   // No more than a hand: the hull smears a hand by about 3 voxels along its axis (5 cm at
   // 16 mm), so a blob is an arm only when longer than length + that.
   if (t_max - t_min <= length + kHullSmear) return centroid;
+  const double longer = std::min(1.0, (t_max - t_min - length - kHullSmear) / kRamp);
+  if (arm_weight) *arm_weight = elongation * longer;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double kept = 0.0;
   for (const auto& [p, w] : voxels)

@@ -117,7 +117,13 @@ HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d
     ata += row * row.transpose();
     atb += row * levelAt(body, k, axis, p.radius, thr).area;
   }
-  fit.top = z_top + 0.5 * s;
+  // The top to a fraction of a level: the top level's area against the one below (a level
+  // that is half full holds the crown's upper half-voxel). Whole levels would move the
+  // top-based estimate in 8 mm steps from frame to frame.
+  const double a_top = levelAt(body, top, axis, p.radius, thr).area;
+  const double a_below = top > 0 ? levelAt(body, top - 1, axis, p.radius, thr).area : 0.0;
+  const double fill = a_below > 0.0 ? std::clamp(a_top / a_below, 0.0, 1.0) : 1.0;
+  fit.top = z_top - 0.5 * s + fill * s;
   fit.levels = n;
   if (n < 3) return fit;
   const Eigen::Vector3d c = ata.ldlt().solve(atb);

@@ -399,17 +399,17 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
           mass += v;
         }
       }
-    if (distal && arm_mass > 0.0) {
-      const Eigen::Vector3d arm_centroid = arm_sum / arm_mass;
-      const Eigen::Vector3d end = distalCentroid(voxels, arm_centroid, comps_[kHeadSlot].estimate,
-                                                 params_.hand_distal_length);
-      if (end != arm_centroid) {  // an arm: its far end
-        centre = end;
-        continue;
-      }
+    double arm = 0.0;  // how surely an arm (distal_centroid.h): blend, so nothing flips
+    Eigen::Vector3d end = centre;
+    if (distal && arm_mass > 0.0)
+      end = distalCentroid(voxels, arm_sum / arm_mass, comps_[kHeadSlot].estimate,
+                           params_.hand_distal_length, &arm);
+    if (arm >= 1.0 || !(mass > 0.0)) {
+      if (arm > 0.0) centre = end;
+      if (!(mass > 0.0) && !(arm > 0.0)) return centre;
+      continue;
     }
-    if (!(mass > 0.0)) return centre;
-    centre = sum / mass;
+    centre = (1.0 - arm) * (sum / mass) + arm * end;
   }
   return centre;
 }

@@ -74,3 +74,24 @@ TEST(DistalCentroid, TheEndAwayFromTheHeadWins) {
   EXPECT_GT(towards_plus_y.y(), c.y() + 0.08);
   EXPECT_LT(towards_minus_y.y(), c.y() - 0.08);
 }
+
+TEST(DistalCentroid, ArmWeightRisesSmoothlyWithTheLength) {
+  // Straight 4 x 4 cm "arms" of growing length along y: no arm up to 0.22 m (hand + smear),
+  // then a weight that grows with the length and reaches 1 five centimetres later, never
+  // jumping by more than what one more voxel of length adds (16 mm of 50: 0.32).
+  const Vector3d head(0.12, -0.6, 0.4);
+  double last = 0.0;
+  for (double len = 0.16; len <= 0.36; len += kVoxel) {
+    std::vector<WeightedPoint> arm;
+    addBox(Vector3d(0.10, -0.30, 0.10), Vector3d(0.14, -0.30 + len, 0.14), &arm);
+    double w = -1.0;
+    distalCentroid(arm, centroidOf(arm), head, 0.17, &w);
+    EXPECT_GE(w, 0.0);
+    EXPECT_LE(w, 1.0);
+    EXPECT_GE(w, last - 1e-12) << "length " << len;
+    EXPECT_LE(w - last, 0.33) << "length " << len;
+    if (len < 0.22 - 1e-9) EXPECT_EQ(w, 0.0) << "length " << len;
+    if (len > 0.28) EXPECT_EQ(w, 1.0) << "length " << len;
+    last = w;
+  }
+}

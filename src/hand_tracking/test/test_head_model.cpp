@@ -56,8 +56,9 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
   // voxel (8 mm) of the blob's widest level, and the top-based estimate is off by the
   // difference between top_above_centre and the true height (0.115 m bald: -20 mm; 0.14 m
   // with hair: +5 mm); hair lifts the widest level by up to 19 mm and, lying at the back,
-  // moves the axis back by as much. Bald: the mean is within 10 mm plus half a voxel (8 mm)
-  // in z; with hair within 12 mm in z and 19 mm in y, plus the same half voxel.
+  // moves the axis back by as much. The top is read to a fraction of a level from the areas,
+  // which on a cap is low by up to a voxel (16 mm). Bald: half of 20 + 16 mm from the top, half
+  // of the vertex's 8 mm: 22 mm; with hair within 12 mm in z and 19 mm in y, plus 8 mm.
   const Vector3d centre(0.03, -0.30, 0.55);
   const Vector3d face = centre + Vector3d(0.0, 0.07, -0.04);
   for (int hair : {0, 1}) {
@@ -70,7 +71,7 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
                 "%d levels\n", hair, 1e3 * e.x(), 1e3 * e.y(), 1e3 * e.z(),
                 1e3 * (face - centre).norm(), fit.top, fit.levels);
     EXPECT_LT(std::abs(e.x()), 0.008);
-    EXPECT_LT(e.norm(), hair ? std::hypot(0.012, 0.019) + 0.008 : 0.010 + 0.008);
+    EXPECT_LT(e.norm(), hair ? std::hypot(0.012, 0.019) + 0.008 : 0.022);
     EXPECT_LT(e.norm(), (face - centre).norm() / 3);
   }
 }

@@ -203,10 +203,10 @@ namespace regression {
 constexpr double kBodyIouMedian = 0.62;          // measured 0.653 (0.646)
 constexpr double kBodyIouWorstDecile = 0.55;     // measured 0.575 (0.580; default, fold_hands)
 constexpr double kSkinIouMedian = 0.24;          // measured 0.255 (0.282; no design bar: a guard)
-constexpr double kHandSkinMmMedian = 11.5;       // measured 10.3 (9.1)
-constexpr double kHandSkinMmWorstDecile = 26.0;  // measured 21.9 (22.3)
-constexpr double kHeadMmMedian = 12.0;           // measured 9.8 (10.1; the design bar itself)
-constexpr double kHeadMmWorstDecile = 20.0;      // measured 14.5 (37.3; the design bar itself)
+constexpr double kHandSkinMmMedian = 10.0;       // measured 8.4 (9.1)
+constexpr double kHandSkinMmWorstDecile = 24.0;  // measured 21.0 (22.3)
+constexpr double kHeadMmMedian = 10.0;           // measured 8.0 (10.1; design bar 12)
+constexpr double kHeadMmWorstDecile = 14.0;      // measured 12.2 (37.3; design bar 20)
 constexpr double kMeshMmMedian = 15.0;           // measured 13.86 (13.16)
 }  // namespace regression
 

@@ -18,8 +18,12 @@ namespace hand_tracking {
 using WeightedPoint = std::pair<Eigen::Vector3d, double>;  // position (m), weight >= 0
 
 // centroid: the weighted centroid of `voxels`; head: a point on the body side (the head).
+// arm_weight (may be null): how surely the blob is an arm, 0 (returned `centroid` unchanged)
+// to 1, rising over the first 5 cm of extent past the threshold and from a variance ratio of
+// 2.25 to 3, so that a caller can blend and a blob near the threshold does not flip between
+// the two answers from frame to frame.
 Eigen::Vector3d distalCentroid(const std::vector<WeightedPoint>& voxels,
                                const Eigen::Vector3d& centroid, const Eigen::Vector3d& head,
-                               double length);
+                               double length, double* arm_weight = nullptr);
 
 }  // namespace hand_tracking
