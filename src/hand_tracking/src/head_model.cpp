@@ -110,19 +110,20 @@ HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d
   const int depth_levels = std::max(3, int(std::lround(p.fit_depth / s)));
   Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
   Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-  int n = 0;
-  for (int k = top; k > top - depth_levels && k >= 0; --k, ++n) {
+  std::vector<double> areas;  // from the top level down
+  for (int k = top; k > top - depth_levels && k >= 0; --k) {
     const double u = levelZ(k) - z_top;
     const Eigen::Vector3d row(1.0, u, u * u);
+    areas.push_back(levelAt(body, k, axis, p.radius, thr).area);
     ata += row * row.transpose();
-    atb += row * levelAt(body, k, axis, p.radius, thr).area;
+    atb += row * areas.back();
   }
+  const int n = int(areas.size());
   // The top to a fraction of a level: the top level's area against the one below (a level
   // that is half full holds the crown's upper half-voxel). Whole levels would move the
   // top-based estimate in 8 mm steps from frame to frame.
-  const double a_top = levelAt(body, top, axis, p.radius, thr).area;
-  const double a_below = top > 0 ? levelAt(body, top - 1, axis, p.radius, thr).area : 0.0;
-  const double fill = a_below > 0.0 ? std::clamp(a_top / a_below, 0.0, 1.0) : 1.0;
+  const double a_below = n > 1 ? areas[1] : 0.0;
+  const double fill = a_below > 0.0 ? std::clamp(areas[0] / a_below, 0.0, 1.0) : 1.0;
   fit.top = z_top - 0.5 * s + fill * s;
   fit.levels = n;
   if (n < 3) return fit;

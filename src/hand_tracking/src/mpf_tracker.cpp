@@ -404,12 +404,8 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
     if (distal && arm_mass > 0.0)
       end = distalCentroid(voxels, arm_sum / arm_mass, comps_[kHeadSlot].estimate,
                            params_.hand_distal_length, &arm);
-    if (arm >= 1.0 || !(mass > 0.0)) {
-      if (arm > 0.0) centre = end;
-      if (!(mass > 0.0) && !(arm > 0.0)) return centre;
-      continue;
-    }
-    centre = (1.0 - arm) * (sum / mass) + arm * end;
+    if (!(mass > 0.0) && !(arm > 0.0)) return centre;
+    centre = mass > 0.0 ? Eigen::Vector3d((1.0 - arm) * (sum / mass) + arm * end) : end;
   }
   return centre;
 }

@@ -187,9 +187,7 @@ PSFS_ALWAYS_INLINE void foregroundRow(const RowConstants& k, int w, const float*
     const float p_bg = use_i * (p_rg_i * q_i) + (1.0f - use_i) * p_rg;
     const float p_fc = 1.0f / (1.0f + odds * p_bg);
     const float sh_chroma = dr * dr + dg * dg < r2 ? 1.0f : 0.0f;
-    const float sh_lo = ix >= lo * mix ? 1.0f : 0.0f;
-    const float sh_hi = ix <= hi * mix ? 1.0f : 0.0f;
-    const float sh = sh_chroma * sh_lo * sh_hi * (1.0f - d);
+    const float sh = sh_chroma * in_band * (1.0f - d);  // the cylinder: chroma and the band
     const float f = outF + keepF * (1.0f - sh) * p_fc;
     const float prior_if_dark = (1.0f - use_i) * d;  // without intensity, dark = no evidence
     pf[x] = prior_if_dark * priorF + (1.0f - prior_if_dark) * f;
@@ -453,14 +451,16 @@ void PixelClassifier::classifyPixel(std::uint8_t R, std::uint8_t G, std::uint8_t
   const std::size_t i = std::size_t(y) * background.width() + x;
   const BackgroundPlanes P = background.planes();
   const double mi = gain * P.mean_intensity[i];
+  // The shadow/highlight band of I / (g I_bg): the intensity model's uniform part and the
+  // shadow cylinder's intensity test.
+  const double lo = params_.shadow_min_intensity_ratio, hi = params_.shadow_max_intensity_ratio;
+  const bool in_band = c.intensity >= lo * mi && c.intensity <= hi * mi;
   // 256 p(I|notF) of the intensity model (pixel_classifier.h).
   auto intensityTerm = [&]() {
-    const double lo = params_.shadow_min_intensity_ratio, hi = params_.shadow_max_intensity_ratio;
     const double w = params_.shadow_weight, tol = params_.gain_tolerance;
     const double var = P.var_intensity[i] + tol * tol * mi * mi;
     const double di = c.intensity - mi;
     const double n = std::exp(-0.5 * di * di / var) / std::sqrt(2.0 * kPi * var);
-    const bool in_band = c.intensity >= lo * mi && c.intensity <= hi * mi;
     return 256.0 * ((1.0 - w) * n + (in_band ? w / ((hi - lo) * std::max(mi, 1.0)) : 0.0));
   };
   bool shadow = false;
@@ -481,9 +481,7 @@ void PixelClassifier::classifyPixel(std::uint8_t R, std::uint8_t G, std::uint8_t
     if (params_.shadow_suppression) {
       const double dr = c.r - P.mean_r[i], dg = c.g - P.mean_g[i];
       const double rad = params_.shadow_chroma_radius;
-      const bool inside = dr * dr + dg * dg < rad * rad &&
-                          c.intensity >= double(params_.shadow_min_intensity_ratio) * mi &&
-                          c.intensity <= double(params_.shadow_max_intensity_ratio) * mi;
+      const bool inside = dr * dr + dg * dg < rad * rad && in_band;
       shadow = inside && p_fc > 0.5;  // the cylinder changed the call
       if (inside) p_fc = 0.0;
     }
