@@ -9,8 +9,12 @@
 #include <fstream>
 #include <random>
 
+#include "body_tracking/arm_ik.h"
 #include "body_tracking/body_parts.h"
+#include "body_tracking/joint_limits.h"
 #include "body_tracking/kinematics.h"
+#include "body_tracking/part_collision.h"
+#include "body_tracking/state_tangent.h"
 #include "body_tracking/swing_twist.h"
 #include "tabletop_sim/body_model.h"
 
@@ -210,6 +214,133 @@ TEST(BodyParts, PartsSitOnTheirBones) {
     EXPECT_TRUE(parts[static_cast<int>(Part::ABDOMEN)].contains(f.pelvis * Vector3d(0, 0, 0.1)));
     EXPECT_FALSE(parts[static_cast<int>(Part::CHEST)].contains(f.chest * Vector3d(0, 0.2, 0.15)));
   }
+}
+
+// Two states are the same pose when every joint and the head sit in the same place.
+double poseDistance(const BodyProfile& p, const BodyState& a, const BodyState& b) {
+  const BodyFrames fa = forwardKinematics(p, a), fb = forwardKinematics(p, b);
+  double d = (fa.head_centre - fb.head_centre).norm();
+  for (int i = 0; i < 2; ++i)
+    d = std::max({d, (fa.shoulder[i] - fb.shoulder[i]).norm(), (fa.elbow[i] - fb.elbow[i]).norm(),
+                  (fa.hand[i] - fb.hand[i]).norm()});
+  return d;
+}
+
+TEST(BodyLimits, EnforceGivesAllowedStatesAndKeepsAllowedOnes) {
+  const BodyLimits limits;
+  const BodyProfile profile;
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int unchanged = 0;
+  for (int k = 0; k < 2000; ++k) {
+    BodyState s = randomState(&rng);
+    if (k % 2) {  // and wild ones
+      for (int i = dof::TORSO_ROLL; i < dof::COUNT; ++i) s[i] = 3.0 * u(rng);
+      s[dof::L_SHIFT] = 0.1 * u(rng);
+      s[dof::R_SHIFT] = 0.1 * u(rng);
+    }
+    BodyState c = s;
+    limits.enforce(&c);
+    ASSERT_TRUE(limits.satisfied(c, 1e-6)) << "state " << k;
+    if (limits.satisfied(s)) {
+      ++unchanged;
+      EXPECT_LT(poseDistance(profile, s, c), 1e-9) << "an allowed pose was moved";
+    }
+  }
+  EXPECT_GT(unchanged, 500);
+  // The simulator's rest pose is allowed.
+  BodyState rest;
+  const tabletop_sim::BodyPose sp = tabletop_sim::BodyModel::restPose();
+  for (int i = 0; i < dof::COUNT; ++i) rest[i] = sp.state[i];
+  EXPECT_TRUE(limits.satisfied(rest));
+}
+
+TEST(StateTangent, RoundTripAndMean) {
+  const BodyProfile profile;
+  std::mt19937 rng(23);
+  std::normal_distribution<double> n(0.0, 0.05);
+  for (int k = 0; k < 300; ++k) {
+    const BodyState at = randomState(&rng), s = randomState(&rng);
+    // Coordinates of s at `at` lead back to s (the same pose; the angles may differ by 2 pi).
+    EXPECT_LT(poseDistance(profile, fromTangent(at, toTangent(at, s)), s), 1e-7);
+    EXPECT_LT(toTangent(at, at).norm(), 1e-9);
+    // Small steps: coordinates of a stepped state give the step back.
+    Tangent step;
+    for (int i = 0; i < kTangentDim; ++i) step[i] = n(rng);
+    EXPECT_LT((toTangent(at, fromTangent(at, step)) - step).norm(), 1e-7);
+  }
+  // The weighted mean of states spread symmetrically about a pose is that pose.
+  const BodyState c = randomState(&rng);
+  std::vector<BodyState> set;
+  std::vector<double> w;
+  for (int k = 0; k < 20; ++k) {
+    Tangent step;
+    for (int i = 0; i < kTangentDim; ++i) step[i] = n(rng);
+    set.push_back(fromTangent(c, step));
+    set.push_back(fromTangent(c, -step));
+    w.push_back(1.0);
+    w.push_back(1.0);
+  }
+  EXPECT_LT(poseDistance(profile, weightedMean(set.data(), w.data(), 40, set[0], 3), c), 2e-3);
+}
+
+TEST(ArmIk, PutsTheHandOnReachableTargets) {
+  const BodyProfile profile;
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int reachable = 0;
+  for (int k = 0; k < 500; ++k) {
+    BodyState s = randomState(&rng);
+    const Side side = k % 2 ? Side::LEFT : Side::RIGHT;
+    const BodyFrames f = forwardKinematics(profile, s);
+    const int i = static_cast<int>(side);
+    const Vector3d target = f.shoulder[i] + 0.6 * Vector3d(u(rng), u(rng), u(rng));
+    const Vector3d pole = f.shoulder[i] + Vector3d(0, 0, -0.5);
+    const bool ok = solveArmIk(profile, side, target, pole, &s);
+    const BodyFrames g = forwardKinematics(profile, s);
+    const double reach = profile.upper_arm + profile.forearm + profile.wrist_to_hand;
+    const double d = (target - f.shoulder[i]).norm();
+    EXPECT_EQ(ok, d <= reach - 1e-4 && d >= std::abs(profile.upper_arm - profile.forearm - profile.wrist_to_hand) + 1e-4);
+    if (ok) {
+      ++reachable;
+      EXPECT_LT((g.hand[i] - target).norm(), 1e-6);
+      // The elbow bends towards the pole (below the shoulder-target line here).
+      const Vector3d axis = (target - g.shoulder[i]).normalized();
+      const Vector3d e = g.elbow[i] - g.shoulder[i];
+      const Vector3d off = e - axis * e.dot(axis);
+      const Vector3d pd = (pole - g.shoulder[i]) - axis * (pole - g.shoulder[i]).dot(axis);
+      if (off.norm() > 1e-3 && pd.norm() > 1e-3) {
+        EXPECT_GT(off.dot(pd), 0.0);
+      }
+    }
+    // The other arm is untouched.
+    EXPECT_LT((g.hand[1 - i] - f.hand[1 - i]).norm(), 1e-12);
+  }
+  EXPECT_GT(reachable, 200);
+}
+
+TEST(PartCollision, ArmThroughTheChestCollidesHandsOnTheDeskDoNot) {
+  const BodyProfile profile;
+  BodyState rest;
+  const tabletop_sim::BodyPose sp = tabletop_sim::BodyModel::restPose();
+  for (int i = 0; i < dof::COUNT; ++i) rest[i] = sp.state[i];
+  BodyFrames f = forwardKinematics(profile, rest);
+  EXPECT_FALSE(bodyCollides(profile, f, buildParts(profile, f)));
+  // Swing the left upper arm across the chest (towards +x, the person's right).
+  BodyState s = rest;
+  s[dof::L_SWING_1] = 0.0;
+  s[dof::L_SWING_2] = -1.4;
+  s[dof::L_FLEX] = 0.0;
+  f = forwardKinematics(profile, s);
+  EXPECT_TRUE(bodyCollides(profile, f, buildParts(profile, f)));
+  // Forearms through each other: both pointing at the same spot in front of the chest.
+  s = rest;
+  for (Side side : {Side::LEFT, Side::RIGHT}) {
+    const Vector3d target(side == Side::LEFT ? 0.12 : -0.12, -0.10, 0.10);
+    solveArmIk(profile, side, target, Vector3d(0, -0.6, -0.3), &s);
+  }
+  f = forwardKinematics(profile, s);
+  EXPECT_TRUE(bodyCollides(profile, f, buildParts(profile, f)));
 }
 
 TEST(BodyProfile, YamlMergeAndErrors) {

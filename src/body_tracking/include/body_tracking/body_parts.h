@@ -34,6 +34,8 @@ inline bool isSkinPart(Part p) {
   return p == Part::HEAD || p == Part::LEFT_HAND || p == Part::RIGHT_HAND;
 }
 
+inline bool isTrunkPart(Part p) { return p == Part::ABDOMEN || p == Part::CHEST; }
+
 using BodyParts = std::array<TruncatedQuadric, kNumParts>;
 
 BodyParts buildParts(const BodyProfile& profile, const BodyFrames& frames);
