@@ -118,6 +118,8 @@ GroundTruth SimulatedRig::truth(int frame) const {
     g.left_hand = g.right_hand = g.head = Eigen::Vector3d::Constant(nan);
     g.left_hand_skin = g.right_hand_skin = g.left_hand;
     g.body_state.fill(nan);
+    g.shoulder.fill(Eigen::Vector3d::Constant(nan));
+    g.elbow = g.wrist = g.shoulder;
     return g;
   }
   const BodyPose p = pose(frame);
@@ -134,6 +136,10 @@ GroundTruth SimulatedRig::truth(int frame) const {
   g.right_hand_in_workspace = ws.contains(g.right_hand);
   g.head_in_workspace = ws.contains(g.head);
   for (int i = 0; i < 18; ++i) g.body_state[i] = p.state[i];
+  const BodyFrames bf = body_.forward(p);
+  g.shoulder = bf.shoulder;
+  g.elbow = bf.elbow;
+  g.wrist = bf.wrist;
   g.hand_shapes = {{p.hands[0].shape, p.hands[1].shape}};
   return g;
 }

@@ -1,5 +1,5 @@
 // Parameters of the partitioned annealed particle filter (papf.h); config/papf.yaml documents
-// each one for users. Defaults: the thesis' settings at 25 fps (5.2.1: N = 256, L = 4,
+// each one for users and papf_config.h reads it. Defaults: the thesis' settings at 25 fps (5.2.1: N = 256, L = 4,
 // alpha = 0.5, s = 10, 10 % diffusion, process noise bounds).
 #pragma once
 
@@ -8,10 +8,6 @@
 
 #include "body_tracking/hand_refinement.h"
 #include "body_tracking/volume_observation.h"
-
-namespace YAML {
-class Node;
-}
 
 namespace body_tracking {
 
@@ -51,9 +47,6 @@ struct PapfParams {
 
   // Throws std::invalid_argument naming the parameter.
   void validate() const;
-  // Keys missing keep their value; unknown keys throw.
-  void merge(const YAML::Node& node);
-  static PapfParams fromYamlFile(const std::string& path);
 };
 
 }  // namespace body_tracking

@@ -57,6 +57,8 @@ struct GroundTruth {
   Eigen::Vector3d left_hand_skin, right_hand_skin;
   bool left_hand_in_workspace = false, right_hand_in_workspace = false, head_in_workspace = false;
   std::array<double, 18> body_state{};  // tabletop_msgs/BodyPose.state order; NaN if absent
+  // Joints implied by body_state (body_model.h), by Side; NaN if absent.
+  std::array<Eigen::Vector3d, 2> shoulder, elbow, wrist;
   std::array<HandShape, 2> hand_shapes{{HandShape::OPEN, HandShape::OPEN}};  // by Side
 };
 

@@ -45,6 +45,13 @@ tabletop_msgs::BodyPose toBodyPoseMsg(const GroundTruth& gt, const ros::Time& st
   msg.left_hand = toPoint(gt.left_hand);
   msg.right_hand = toPoint(gt.right_hand);
   msg.head = toPoint(gt.head);
+  msg.left_shoulder = toPoint(gt.shoulder[0]);
+  msg.right_shoulder = toPoint(gt.shoulder[1]);
+  msg.left_elbow = toPoint(gt.elbow[0]);
+  msg.right_elbow = toPoint(gt.elbow[1]);
+  msg.left_wrist = toPoint(gt.wrist[0]);
+  msg.right_wrist = toPoint(gt.wrist[1]);
+  msg.valid = gt.person_present;
   return msg;
 }
 
