@@ -133,11 +133,14 @@ double VolumeObservation::partScore(const TruncatedQuadric& part, bool skin_part
   // Along a row, v(x) = v0 + x h e_x: v^T Q v = A + B x + C x^2 and each plane P0 + P1 x.
   const double C = h * h * part.Q(0, 0);
   double sw = 0, swy = 0;
+  // Q v0 is affine in the row's (y, z): one 4x4 product per part, then additions.
+  const Vector4d base(grid_.origin.x() + 0.5 * h, grid_.origin.y() + 0.5 * h,
+                      grid_.origin.z() + 0.5 * h, 1.0);
+  const Vector4d q_base = part.Q * base, q_dy = h * part.Q.col(1), q_dz = h * part.Q.col(2);
   for (int z = z0; z <= z1; ++z)
     for (int yy = y0; yy <= y1; ++yy) {
-      const Vector4d v0(grid_.origin.x() + 0.5 * h, grid_.origin.y() + (yy + 0.5) * h,
-                        grid_.origin.z() + (z + 0.5) * h, 1.0);
-      const Vector4d qv = part.Q * v0;
+      const Vector4d v0 = base + Vector4d(0.0, yy * h, z * h, 0.0);
+      const Vector4d qv = q_base + yy * q_dy + z * q_dz;
       const double A = v0.dot(qv), B = 2.0 * h * qv.x();
       double xlo = bx0, xhi = bx1;
       if (C > 1e-15) {

@@ -1,0 +1,135 @@
+// PAPF timings (DESIGN.md section 6: "PAPF 256 particles x 4 layers <= 10 ms" on 2 cores; the
+// thesis: 25.8 ms on a GTX 280). Input: 40 consecutive frames of the simulated rig's
+// reach_targets script in short sleeves, rendered and reconstructed by psfs::Reconstructor
+// (64x64x48 body and skin volumes), prepared once (~3 s). A tracker is warmed up on them, then
+// each iteration is one full update (downsampling, three partitions x L layers, hands) on the
+// next frame, going back and forth over the 40 so that no step is a jump. Same-run baseline:
+// the MPF hand/head tracker with 1000 particles on the same volumes (its bar: 1 ms).
+//
+//   bench_papf --benchmark_repetitions=3 [--benchmark_filter=...]
+#include <benchmark/benchmark.h>
+
+#include "body_tracking/papf.h"
+#include "body_tracking/silhouette_mask.h"
+#include "hand_tracking/mpf_tracker.h"
+#include "psfs_reconstruction/gaussian_mixture.h"
+#include "psfs_reconstruction/reconstructor.h"
+#include "tabletop_sim/simulated_rig.h"
+
+namespace body_tracking {
+namespace {
+
+namespace sim = tabletop_sim;
+
+struct Frames {
+  std::vector<psfs::ProbabilityVolume> skin, body;
+  std::vector<tabletop_capture::CameraModel> cameras;
+  Frames() {
+    constexpr int kLearn = 25, kFrames = 40, kSkip = 60;  // start mid-reach
+    sim::SimOptions o;
+    o.script = "reach_targets";
+    o.short_sleeves = true;
+    o.empty_frames = kLearn;
+    sim::SimulatedRig rig(o);
+    cameras = rig.rig().cameras;
+    psfs::ReconstructorParams rp;
+    psfs::Reconstructor rec(psfs::GaussianMixture2D::load(BODY_TRACKING_SKIN_MODEL), rp);
+    for (int f = 0; f < kLearn; ++f) rec.process(rig.render(f).images, rig.rig().cameras);
+    for (int f = kLearn + kSkip; f < kLearn + kSkip + kFrames; ++f) {
+      psfs::FrameResult r = rec.process(rig.render(f).images, rig.rig().cameras);
+      skin.push_back(std::move(r.skin));
+      body.push_back(std::move(r.body));
+    }
+  }
+  // Back and forth: 0, 1, ..., n-1, n-2, ..., 1, 0, 1, ...
+  size_t at(size_t i) const {
+    const size_t n = body.size(), p = 2 * (n - 1);
+    const size_t k = i % p;
+    return k < n ? k : p - k;
+  }
+};
+
+const Frames& frames() {
+  static const Frames f;
+  return f;
+}
+
+// Arguments: particles, layers, observation downsample (2: 32x32x24, 1: 64x64x48), threads.
+void BM_PapfUpdate(benchmark::State& st) {
+  const Frames& f = frames();
+  PapfParams p;
+  p.particles = static_cast<int>(st.range(0));
+  p.layers = static_cast<int>(st.range(1));
+  p.observation.downsample = static_cast<int>(st.range(2));
+  p.threads = static_cast<int>(st.range(3));
+  Papf papf(BodyProfile(), p);
+  const size_t n = f.body.size();
+  for (size_t i = 0; i < n; ++i) papf.update(f.body[i], &f.skin[i]);  // start and warm up
+  size_t i = n - 1;
+  double obs = 0, score = 0;
+  int frames_run = 0;
+  for (auto _ : st) {
+    const size_t k = f.at(i++);
+    const BodyEstimate& e = papf.update(f.body[k], &f.skin[k]);
+    benchmark::DoNotOptimize(e.state.data());
+    obs += papf.lastTimes().observation_ms;
+    score += e.score;
+    ++frames_run;
+  }
+  st.counters["observation_ms"] = obs / frames_run;
+  st.counters["fit"] = score / frames_run;
+}
+BENCHMARK(BM_PapfUpdate)
+    ->ArgNames({"particles", "layers", "downsample", "threads"})
+    ->Args({256, 4, 2, 2})
+    ->Args({256, 4, 2, 1})
+    ->Args({256, 4, 1, 2})
+    ->Args({128, 4, 2, 2})
+    ->Args({512, 4, 2, 2})
+    ->Args({1024, 4, 2, 2})
+    ->Args({2048, 4, 2, 2})
+    ->Args({256, 2, 2, 2})
+    ->Args({256, 8, 2, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The same-run baseline: the MPF (1000 particles: head 200, hands 400 each) on the same frames.
+void BM_MpfBaseline(benchmark::State& st) {
+  const Frames& f = frames();
+  hand_tracking::MpfParams p;
+  p.hand_particles = 400;
+  p.head_particles = 200;
+  p.threads = static_cast<int>(st.range(0));
+  hand_tracking::MpfTracker mpf(p, 1);
+  const size_t n = f.body.size();
+  for (size_t i = 0; i < n; ++i) mpf.update(f.skin[i], f.body[i], 0.04);
+  size_t i = n - 1;
+  for (auto _ : st) {
+    const size_t k = f.at(i++);
+    benchmark::DoNotOptimize(mpf.update(f.skin[k], f.body[k], 0.04).data());
+  }
+}
+BENCHMARK(BM_MpfBaseline)->ArgName("threads")->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Silhouette masks of a tracked pose for all 8 cameras (argument: margin in px).
+void BM_Masks8Cameras(benchmark::State& st) {
+  const Frames& f = frames();
+  PapfParams p;
+  Papf papf(BodyProfile(), p);
+  for (size_t i = 0; i < f.body.size(); ++i) papf.update(f.body[i], &f.skin[i]);
+  const BodyParts parts = buildParts(papf.profile(), papf.estimate().frames);
+  std::vector<SilhouetteProjector> projectors;
+  for (const auto& c : f.cameras) projectors.emplace_back(c);
+  std::vector<cv::Mat> masks(projectors.size());
+  for (auto _ : st) {
+    for (size_t c = 0; c < projectors.size(); ++c)
+      projectors[c].draw(parts, static_cast<double>(st.range(0)), &masks[c]);
+    benchmark::DoNotOptimize(masks[0].data);
+  }
+}
+BENCHMARK(BM_Masks8Cameras)->ArgName("margin_px")->Arg(0)->Arg(4)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace body_tracking
+
+BENCHMARK_MAIN();
