@@ -6,7 +6,9 @@
 // reconstruction beside the truth as top, front and side projections. When a hand tracker
 // publishes hands/targets, its targets are scored against ground_truth/targets (same stamps)
 // with TrackingEvaluator: errors, losses, identity switches in the summary and
-// tracking_error.png.
+// tracking_error.png. When the body tracker publishes body/pose, its head, hands, elbows and
+// shoulders are scored against ground_truth/body_pose, and the contact sheet shows its stick
+// skeleton and the outlines of its silhouette masks (cam<i>/body_mask) over each view.
 //
 // Parameters (private):
 //   ~frames        frame sets to wait for before finishing (0 = until Ctrl-C)       [0]
@@ -47,6 +49,8 @@
 #include <ros/ros.h>
 #include <std_msgs/Header.h>
 
+#include <sensor_msgs/Image.h>
+#include <tabletop_msgs/BodyPose.h>
 #include <tabletop_msgs/HandVolumes.h>
 #include <tabletop_msgs/MultiViewFrame.h>
 #include <tabletop_msgs/TrackedTargets.h>
@@ -122,6 +126,8 @@ class DemoMonitor {
     }
     truth_sub_ = nh_.subscribe("ground_truth/targets", 50, &DemoMonitor::onTruth, this);
     tracked_sub_ = nh_.subscribe("hands/targets", 300, &DemoMonitor::onTracked, this);
+    body_sub_ = nh_.subscribe("body/pose", 300, &DemoMonitor::onBodyPose, this);
+    body_truth_sub_ = nh_.subscribe("ground_truth/body_pose", 50, &DemoMonitor::onBodyTruth, this);
     diag_sub_ = nh_.subscribe("/diagnostics", 50, &DemoMonitor::onDiagnostics, this);
     timer_ = nh_.createWallTimer(ros::WallDuration(0.5), &DemoMonitor::onTimer, this);
     start_ = ros::WallTime::now();
@@ -137,6 +143,14 @@ class DemoMonitor {
     if (received_ == 0) first_ = ros::WallTime::now();
     last_ = ros::WallTime::now();
     ++received_;
+    if (mask_subs_.empty() && body_sub_.getNumPublishers() > 0) {
+      // The body tracker draws its silhouettes only while someone listens: the sheet's overlay.
+      for (size_t i = 0; i < msg->camera_names.size(); ++i) {
+        boost::function<void(const sensor_msgs::Image::ConstPtr&)> cb =
+            [this, i](const sensor_msgs::Image::ConstPtr& m) { onBodyMask(i, m); };
+        mask_subs_.push_back(nh_.subscribe<sensor_msgs::Image>(msg->camera_names[i] + "/body_mask", 5, cb));
+      }
+    }
     // Keep the latest frame that shows the person (ground truth says a target is active) for
     // the contact sheet; fall back to the latest frame.
     auto it = truth_.find(msg->header.stamp);
@@ -181,6 +195,51 @@ class DemoMonitor {
     scored_tracked_[stamp] = t->second;  // for the contact sheet
     while (scored_tracked_.size() > 100) scored_tracked_.erase(scored_tracked_.begin());
     tracked_.erase(t);
+  }
+
+  // Body tracker output and truth, paired by stamp.
+  void onBodyPose(const tabletop_msgs::BodyPose::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    body_tracked_[msg->header.stamp] = msg;
+    while (body_tracked_.size() > 100) body_tracked_.erase(body_tracked_.begin());
+    scoreBody(msg->header.stamp);
+  }
+  void onBodyTruth(const tabletop_msgs::BodyPose::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    body_truth_[msg->header.stamp] = msg;
+    while (body_truth_.size() > 200) body_truth_.erase(body_truth_.begin());
+    scoreBody(msg->header.stamp);
+  }
+  void scoreBody(const ros::Time& stamp) {
+    auto t = body_tracked_.find(stamp);
+    auto g = body_truth_.find(stamp);
+    if (t == body_tracked_.end() || g == body_truth_.end()) return;
+    scored_body_[stamp] = t->second;
+    while (scored_body_.size() > 100) scored_body_.erase(scored_body_.begin());
+    const auto& a = *t->second;
+    const auto& b = *g->second;
+    if (b.valid) {
+      ++body_person_frames_;
+      if (a.valid) {
+        auto d = [](const geometry_msgs::Point& p, const geometry_msgs::Point& q) {
+          return 1e3 * std::sqrt((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) + (p.z - q.z) * (p.z - q.z));
+        };
+        body_err_[0].add(d(a.head, b.head));
+        body_err_[1].add(0.5 * (d(a.left_hand, b.left_hand) + d(a.right_hand, b.right_hand)));
+        body_err_[2].add(0.5 * (d(a.left_elbow, b.left_elbow) + d(a.right_elbow, b.right_elbow)));
+        body_err_[3].add(0.5 * (d(a.left_shoulder, b.left_shoulder) + d(a.right_shoulder, b.right_shoulder)));
+      }
+    } else if (a.valid) {
+      ++body_false_frames_;
+    }
+    body_tracked_.erase(t);
+  }
+  void onBodyMask(size_t camera, const sensor_msgs::Image::ConstPtr& m) {
+    if (m->encoding != "mono8" || m->data.size() < size_t(m->step) * m->height) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto& masks = body_masks_[camera];
+    masks[m->header.stamp] = m;
+    while (masks.size() > 30) masks.erase(masks.begin());
   }
 
   void onTruth(const tabletop_msgs::TrackedTargets::ConstPtr& msg) {
@@ -330,6 +389,16 @@ class DemoMonitor {
       if (!fields.empty()) s << "  " << st.first << ":" << fields << "\n";
     }
     s << pipelineSummary();
+    if (body_person_frames_ > 0 || body_false_frames_ > 0) {
+      std::snprintf(buf, sizeof(buf),
+                    "body tracker (PAPF)   tracked %llu of %llu frames with the person, %llu without; "
+                    "mean error head %.1f mm, hands %.1f mm, elbows %.1f mm, shoulders %.1f mm\n",
+                    static_cast<unsigned long long>(body_err_[0].count()),
+                    static_cast<unsigned long long>(body_person_frames_),
+                    static_cast<unsigned long long>(body_false_frames_), body_err_[0].mean(),
+                    body_err_[1].mean(), body_err_[2].mean(), body_err_[3].mean());
+      s << buf;
+    }
     for (int k = 0; k < 2; ++k) {
       const char* kind = k == 0 ? "body" : "skin";
       if (iou_[k].count() > 0) {
@@ -419,6 +488,7 @@ class DemoMonitor {
     const auto* sync = stage("frame synchronizer");
     const auto* psfs = stage("psfs reconstruction");
     const auto* mpf = stage("mpf hand tracking");
+    const auto* papf = stage("papf body tracking");
     const auto* mesher = stage("hand meshing");
     std::ostringstream s;
     char buf[512];
@@ -454,6 +524,10 @@ class DemoMonitor {
       std::snprintf(buf, sizeof(buf), " -> hand meshes for %.0f sets", number(mesher, "frames"));
       s << buf;
     }
+    if (papf) {
+      std::snprintf(buf, sizeof(buf), "; pSfS -> PAPF %.0f", number(papf, "frames"));
+      s << buf;
+    }
     s << "\n";
     if (psfs && psfs->count("load shedding"))
       s << "load shedding          " << psfs->at("load shedding") << ", hand volume sets shed "
@@ -463,6 +537,7 @@ class DemoMonitor {
         {number(rig, "render time mean (ms)"), "simulated rig rendering"},
         {number(psfs, "total (ms)"), "pSfS reconstruction"},
         {number(mpf, "mpf total (ms)"), "MPF tracking"},
+        {number(papf, "papf total (ms)"), "PAPF body tracking"},
         {2 * number(mesher, "meshing per hand (ms)"), "hand meshing (2 hands)"}};
     std::string list;
     double worst = -1;
@@ -561,6 +636,9 @@ class DemoMonitor {
     if (it != truth_msgs_.end()) truth = it->second;
     auto tr = scored_tracked_.find(f.header.stamp);
     if (tr != scored_tracked_.end()) tracked = tr->second;
+    tabletop_msgs::BodyPose::ConstPtr body;
+    auto bp = scored_body_.find(f.header.stamp);
+    if (bp != scored_body_.end()) body = bp->second;
     for (size_t i = 0; i < n; ++i) {
       const auto& im = f.images[i];
       if (im.encoding != "rgb8" || im.data.size() < size_t(im.step) * im.height) continue;
@@ -596,9 +674,47 @@ class DemoMonitor {
         };
         draw(truth, true);
         draw(tracked, false);
+        // The body tracker: its silhouette outlines (the masks it publishes for the background
+        // update) and its stick skeleton, both of this frame set.
+        auto mk = body_masks_.find(i);
+        if (mk != body_masks_.end()) {
+          auto m = mk->second.find(f.header.stamp);
+          if (m != mk->second.end() && m->second->width == im.width && m->second->height == im.height) {
+            cv::Mat mask(m->second->height, m->second->width, CV_8UC1,
+                         const_cast<uint8_t*>(m->second->data.data()), m->second->step);
+            std::vector<std::vector<cv::Point>> contours;
+            cv::findContours(mask.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+            cv::drawContours(cell, contours, -1, cv::Scalar(0, 220, 255), 1, cv::LINE_AA);
+          }
+        }
+        if (body && body->valid) {
+          auto px = [&](const geometry_msgs::Point& p, cv::Point* out) {
+            Eigen::Vector2d q;
+            if (!cam.projectWorld(Eigen::Vector3d(p.x, p.y, p.z), &q)) return false;
+            *out = cv::Point(std::lround(q.x()), std::lround(q.y()));
+            return true;
+          };
+          auto bone = [&](const geometry_msgs::Point& a, const geometry_msgs::Point& b) {
+            cv::Point pa, pb;
+            if (px(a, &pa) && px(b, &pb)) cv::line(cell, pa, pb, cv::Scalar(255, 255, 0), 2, cv::LINE_AA);
+          };
+          geometry_msgs::Point neck;
+          neck.x = 0.5 * (body->left_shoulder.x + body->right_shoulder.x);
+          neck.y = 0.5 * (body->left_shoulder.y + body->right_shoulder.y);
+          neck.z = 0.5 * (body->left_shoulder.z + body->right_shoulder.z);
+          bone(neck, body->head);
+          bone(body->left_shoulder, body->right_shoulder);
+          bone(body->left_shoulder, body->left_elbow);
+          bone(body->left_elbow, body->left_wrist);
+          bone(body->left_wrist, body->left_hand);
+          bone(body->right_shoulder, body->right_elbow);
+          bone(body->right_elbow, body->right_wrist);
+          bone(body->right_wrist, body->right_hand);
+        }
       }
     }
-    cv::putText(sheet, "+ ground truth   o tracked", cv::Point(5, sheet.rows - 6),
+    cv::putText(sheet, body ? "+ ground truth   o tracked   cyan: body skeleton, yellow: body model outline"
+                            : "+ ground truth   o tracked", cv::Point(5, sheet.rows - 6),
                 cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     return cv::imwrite(path, sheet);
   }
@@ -606,6 +722,12 @@ class DemoMonitor {
   ros::NodeHandle nh_, pnh_;
   ros::WallTimer subscribe_timer_;
   ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_, hands_sub_, processed_sub_;
+  ros::Subscriber body_sub_, body_truth_sub_;
+  std::vector<ros::Subscriber> mask_subs_;
+  std::map<ros::Time, tabletop_msgs::BodyPose::ConstPtr> body_tracked_, body_truth_, scored_body_;
+  std::map<size_t, std::map<ros::Time, sensor_msgs::Image::ConstPtr>> body_masks_;
+  tabletop_common::RunningStats body_err_[4];  // head, hands, elbows, shoulders (mm)
+  uint64_t body_person_frames_ = 0, body_false_frames_ = 0;
   bool digests_ = false;
   // Keyed by (pass over the bag, stamp): a bag played twice in one run has the same stamps twice.
   std::map<std::pair<int, ros::Time>, std::map<std::string, std::string>> digest_;
