@@ -318,7 +318,7 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
     for (int i = 0; i < n; ++i) {
       if (i < static_cast<int>(foreground_masks.size()) && !foreground_masks[i].empty() &&
           foreground_masks[i].type() == CV_8UC1 && foreground_masks[i].size() == rgb[i].size())
-        masks[i] = foreground_masks[i];
+        cv::bitwise_or(masks[i], foreground_masks[i], masks[i]);
       // A switched-off camera shows no scene: learning from it would poison the model.
       if (r.camera_active[i]) backgrounds_[i].update(rgb[i], masks[i], params_.threads);
     }

@@ -66,6 +66,8 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
       .add("nodelet/load_shedding", &c->nodelet.load_shedding)
       .add("nodelet/shed_drop_fraction", &c->nodelet.shed_drop_fraction)
       .add("nodelet/foreground_mask_topics", &c->nodelet.foreground_mask_topics)
+      .add("nodelet/foreground_mask_topic", &c->nodelet.foreground_mask_topic)
+      .add("nodelet/foreground_mask_max_age", &c->nodelet.foreground_mask_max_age)
       .add("nodelet/background_load_dir", &c->nodelet.background_load_dir)
       .add("nodelet/background_save_dir", &c->nodelet.background_save_dir)
       .add("nodelet/publish_clouds", &c->nodelet.publish_clouds);
@@ -91,6 +93,10 @@ void finishReconstructorConfig(const std::string& path, ReconstructorConfig* cfg
     throw std::runtime_error(where + e.what());
   }
   if (c.nodelet.hand_roi_max_age <= 0) throw std::runtime_error(where + "hand_volumes/max_age: must be > 0");
+  if (!(c.nodelet.foreground_mask_max_age >= 0))
+    throw std::runtime_error(where + "nodelet/foreground_mask_max_age: must be >= 0");
+  if (c.nodelet.foreground_mask_topic.empty())
+    throw std::runtime_error(where + "nodelet/foreground_mask_topic: must not be empty");
   if (c.nodelet.max_hand_rois < 0 || c.nodelet.max_hand_rois > 8)
     throw std::runtime_error(where + "hand_volumes/max_hands: must lie in [0, 8]");
   if (c.nodelet.queue_size < 1) throw std::runtime_error(where + "nodelet/queue_size: must be >= 1");

@@ -135,8 +135,11 @@ class Reconstructor {
 
   // One frame set: rgb8 images in the cameras' order. hand_rois: centres (world, m) of the hand
   // sub-volumes wanted this frame. foreground_masks: optional CV_8UC1 per camera (nonzero =
-  // foreground) for the background update instead of the volume's back-projection; empty or
-  // wrongly sized masks fall back to the back-projection.
+  // foreground, e.g. the body tracker's silhouettes, which also cover the person outside the
+  // grid) that mask the background update together with the volume's back-projection (their
+  // union: a model's silhouettes alone miss hair, fingers and misplaced limbs, which were then
+  // learned, carved from the volume and missed again: a runaway, test_body_loop); empty or
+  // wrongly sized masks leave the back-projection alone.
   // Throws std::invalid_argument (nothing changed) for an invalid frame set.
   FrameResult process(const std::vector<cv::Mat>& rgb,
                       const std::vector<tabletop_capture::CameraModel>& cameras,

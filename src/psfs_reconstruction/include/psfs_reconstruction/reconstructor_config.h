@@ -19,9 +19,15 @@ struct NodeletOptions {
   std::string hand_roi_topic = "hands/targets";  // TrackedTargets; active HAND targets -> ROIs
   double hand_roi_max_age = 0.5;  // s: ROIs older than this (vs the frame stamp) are ignored
   int max_hand_rois = 2;
-  // Subscribe cam<i>/foreground_mask (mono8, same stamp as the frame set) for the selective
-  // background update instead of the volume's back-projection.
+  // Mask the background update with per-camera masks from <camera>/<foreground_mask_topic>
+  // (mono8, nonzero = person), OR-ed with the volume's back-projection: the body tracker's
+  // silhouettes (body_mask), which also cover the person outside the grid (the torso leak of
+  // thesis 4.3). A set takes each camera's newest mask not newer than its stamp and at most
+  // foreground_mask_max_age older (the tracker's masks are of the previous set). Off by
+  // default: nothing waits for the masks, so offline runs would depend on timing.
   bool foreground_mask_topics = false;
+  std::string foreground_mask_topic = "body_mask";
+  double foreground_mask_max_age = 0.2;  // s
   // Frame sets waiting in the stage's gate (tabletop_common/pipeline_gate.h): beyond it the
   // oldest waiting set is dropped (the pipeline's one drop point). Live: 2 (a source in
   // lockstep with up to 2 sets in flight then never loses one to thread timing); offline

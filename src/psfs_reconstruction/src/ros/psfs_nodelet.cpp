@@ -365,7 +365,10 @@ class PsfsNodelet : public nodelet::Nodelet {
 
   void onMask(size_t camera, const sensor_msgs::Image::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(roi_mutex_);
-    if (camera < masks_.size()) masks_[camera] = msg;
+    if (camera >= masks_.size()) return;
+    auto& history = masks_[camera];
+    history[msg->header.stamp] = msg;
+    while (history.size() > 5) history.erase(history.begin());
   }
 
   std::vector<std::pair<uint32_t, Eigen::Vector3d>> currentRois(const ros::Time& stamp) {
@@ -389,19 +392,23 @@ class PsfsNodelet : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(roi_mutex_);
     if (mask_subs_.size() != f.camera_names.size()) {  // (re)subscribe for this rig
       mask_subs_.clear();
-      masks_.assign(f.camera_names.size(), nullptr);
+      masks_.assign(f.camera_names.size(), {});
       for (size_t i = 0; i < f.camera_names.size(); ++i) {
         boost::function<void(const sensor_msgs::Image::ConstPtr&)> cb =
             [this, i](const sensor_msgs::Image::ConstPtr& m) { onMask(i, m); };
         mask_subs_.push_back(getNodeHandle().subscribe<sensor_msgs::Image>(
-            f.camera_names[i] + "/foreground_mask", 2, cb));
+            f.camera_names[i] + "/" + cfg_.nodelet.foreground_mask_topic, 2, cb));
       }
     }
     out.resize(masks_.size());
     for (size_t i = 0; i < masks_.size(); ++i) {
-      const auto& m = masks_[i];
-      if (m && m->header.stamp == f.header.stamp && m->encoding == "mono8" &&
-          m->data.size() >= size_t(m->step) * m->height)
+      // The newest mask not newer than the set, if recent enough (the tracker's are of the
+      // previous set).
+      auto it = masks_[i].upper_bound(f.header.stamp);
+      if (it == masks_[i].begin()) continue;
+      const auto& m = std::prev(it)->second;
+      if ((f.header.stamp - m->header.stamp).toSec() > cfg_.nodelet.foreground_mask_max_age) continue;
+      if (m->encoding == "mono8" && m->data.size() >= size_t(m->step) * m->height)
         out[i] = cv::Mat(m->height, m->width, CV_8UC1, const_cast<uint8_t*>(m->data.data()), m->step);
     }
     return out;
@@ -660,7 +667,7 @@ class PsfsNodelet : public nodelet::Nodelet {
 
   std::mutex roi_mutex_;
   tabletop_msgs::TrackedTargets::ConstPtr targets_;
-  std::vector<sensor_msgs::Image::ConstPtr> masks_;
+  std::vector<std::map<ros::Time, sensor_msgs::Image::ConstPtr>> masks_;  // per camera, newest 5
 
   std::mutex stats_mutex_;
   bool load_tried_ = false, announced_ready_ = false, learning_ = true;
