@@ -21,30 +21,38 @@ const char* partName(Part p) {
   return "?";
 }
 
-BodyParts buildParts(const BodyProfile& p, const BodyFrames& f) {
-  BodyParts parts;
+TruncatedQuadric buildPart(const BodyProfile& p, const BodyFrames& f, Part part) {
   // Trunk cylinders run along the frames' z axis; a quarter turn about x puts the cylinder's
   // local y (its axis) there, local x stays the width and local z the depth.
   const Isometry3d up(Eigen::AngleAxisd(M_PI / 2, Vector3d::UnitX()));
-  parts[static_cast<int>(Part::ABDOMEN)] = TruncatedQuadric::cylinder(
-      f.pelvis * up, p.spine_height, p.abdomen_half_width, p.abdomen_half_depth);
-  // The chest reaches a little above the shoulder joints (the shoulders' own girth).
-  parts[static_cast<int>(Part::CHEST)] = TruncatedQuadric::cylinder(
-      f.chest * up, p.shoulder_height + 0.5 * p.upper_arm_radius, p.chest_half_width,
-      p.chest_half_depth);
-  parts[static_cast<int>(Part::HEAD)] = TruncatedQuadric::ellipsoid(
-      f.head * Eigen::Translation3d(0, p.head_centre_forward, p.head_centre_height),
-      Vector3d(p.head_half_width, p.head_half_depth, p.head_half_height));
-  for (Side side : {Side::LEFT, Side::RIGHT}) {
-    const int i = static_cast<int>(side);
-    parts[static_cast<int>(upperArmPart(side))] = TruncatedQuadric::cylinder(
-        f.upper_arm[i], p.upper_arm, p.upper_arm_radius, p.upper_arm_radius);
-    parts[static_cast<int>(forearmPart(side))] = TruncatedQuadric::cylinder(
-        f.forearm[i], p.forearm, p.forearm_radius, p.forearm_radius);
-    parts[static_cast<int>(handPart(side))] = TruncatedQuadric::ellipsoid(
-        f.forearm[i] * Eigen::Translation3d(0, p.forearm + p.wrist_to_hand, 0),
-        Vector3d(p.hand_half_width, p.hand_half_length, p.hand_half_thickness));
+  switch (part) {
+    case Part::ABDOMEN:
+      return TruncatedQuadric::cylinder(f.pelvis * up, p.spine_height, p.abdomen_half_width,
+                                        p.abdomen_half_depth);
+    case Part::CHEST:  // reaches a little above the shoulder joints (the shoulders' own girth)
+      return TruncatedQuadric::cylinder(f.chest * up, p.shoulder_height + 0.5 * p.upper_arm_radius,
+                                        p.chest_half_width, p.chest_half_depth);
+    case Part::HEAD:
+      return TruncatedQuadric::ellipsoid(
+          f.head * Eigen::Translation3d(0, p.head_centre_forward, p.head_centre_height),
+          Vector3d(p.head_half_width, p.head_half_depth, p.head_half_height));
+    default:
+      break;
   }
+  const bool left = part == Part::LEFT_UPPER_ARM || part == Part::LEFT_FOREARM || part == Part::LEFT_HAND;
+  const int i = left ? 0 : 1;
+  if (part == Part::LEFT_UPPER_ARM || part == Part::RIGHT_UPPER_ARM)
+    return TruncatedQuadric::cylinder(f.upper_arm[i], p.upper_arm, p.upper_arm_radius, p.upper_arm_radius);
+  if (part == Part::LEFT_FOREARM || part == Part::RIGHT_FOREARM)
+    return TruncatedQuadric::cylinder(f.forearm[i], p.forearm, p.forearm_radius, p.forearm_radius);
+  return TruncatedQuadric::ellipsoid(
+      f.forearm[i] * Eigen::Translation3d(0, p.forearm + p.wrist_to_hand, 0),
+      Vector3d(p.hand_half_width, p.hand_half_length, p.hand_half_thickness));
+}
+
+BodyParts buildParts(const BodyProfile& p, const BodyFrames& f) {
+  BodyParts parts;
+  for (int k = 0; k < kNumParts; ++k) parts[k] = buildPart(p, f, static_cast<Part>(k));
   return parts;
 }
 

@@ -67,11 +67,20 @@ const PartitionSpec kPartitionSpecs[Papf::kPartitions] = {
 
 double Papf::scoreState(const BodyState& s, int partition) const {
   const BodyFrames f = forwardKinematics(profile_, s);
-  const BodyParts parts = buildParts(profile_, f);
-  if (partition < 0) return bodyCollides(profile_, f, parts) ? 0.0 : observation_.score(parts);
-  // The trunk chain cannot collide with itself; an arm's pose is checked against the trunk and
-  // the other arm as they stand.
-  if (partition > 0 && bodyCollides(profile_, f, parts)) return 0.0;
+  if (partition < 0) {
+    const BodyParts parts = buildParts(profile_, f);
+    return bodyCollides(profile_, f, parts) ? 0.0 : observation_.score(parts);
+  }
+  // Only the parts this partition scores, and for an arm the trunk and head its collision test
+  // needs (part_collision.h): the trunk chain cannot collide with itself; an arm's pose is
+  // checked against the trunk and the other arm as they stand.
+  BodyParts parts;
+  for (Part p : kPartitionSpecs[partition].parts) parts[static_cast<int>(p)] = buildPart(profile_, f, p);
+  if (partition > 0) {
+    for (Part p : {Part::ABDOMEN, Part::CHEST, Part::HEAD})
+      parts[static_cast<int>(p)] = buildPart(profile_, f, p);
+    if (bodyCollides(profile_, f, parts)) return 0.0;
+  }
   double sum = 0;
   for (Part p : kPartitionSpecs[partition].parts)
     sum += observation_.partScore(parts[static_cast<int>(p)], isSkinPart(p), isTrunkPart(p));
@@ -143,12 +152,14 @@ void Papf::crossoverAndDiffuse(int partition) {
   const int n = static_cast<int>(particles_.size());
   const int best = static_cast<int>(std::max_element(weights_.begin(), weights_.end()) - weights_.begin());
   const BodyState mean = weightedMean(particles_.data(), weights_.data(), n, particles_[best], 1);
-  Tangent tm = Tangent::Zero();
+  // Tangent coordinates and children in parallel; every random number is drawn first, in a
+  // fixed order, so the result does not depend on the thread count.
+  const int threads = std::max(1, params_.threads);
   std::vector<Tangent> t(n);
-  for (int i = 0; i < n; ++i) {
-    t[i] = toTangent(mean, particles_[i]);
-    tm += weights_[i] * t[i];
-  }
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int i = 0; i < n; ++i) t[i] = toTangent(mean, particles_[i]);
+  Tangent tm = Tangent::Zero();
+  for (int i = 0; i < n; ++i) tm += weights_[i] * t[i];
   // Covariance over the partition's coordinates only: the other chains were settled by their
   // own layers.
   Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(ps.count, ps.count);
@@ -162,18 +173,28 @@ void Papf::crossoverAndDiffuse(int partition) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_int_distribution<int> cut(0, ps.count);
+  struct Draw {
+    int a, b, g, d;
+    Eigen::VectorXd z;
+  };
+  std::vector<Draw> draws(n);
+  for (Draw& dr : draws) {
+    dr.a = drawIndex(uni(rng_));
+    dr.b = drawIndex(uni(rng_));
+    dr.g = cut(rng_);
+    dr.d = cut(rng_);
+    if (dr.g > dr.d) std::swap(dr.g, dr.d);
+    dr.z.resize(ps.count);
+    for (int j = 0; j < ps.count; ++j) dr.z[j] = normal(rng_);
+  }
   scratch_.resize(n);
+#pragma omp parallel for num_threads(threads) schedule(static)
   for (int i = 0; i < n; ++i) {
-    const BodyState& a = particles_[drawIndex(uni(rng_))];
-    const BodyState& b = particles_[drawIndex(uni(rng_))];
-    int g = cut(rng_), d = cut(rng_);
-    if (g > d) std::swap(g, d);
-    BodyState child = a;
-    for (int j = g; j < d; ++j) child[ps.first + j] = b[ps.first + j];
-    Eigen::VectorXd z(ps.count);
-    for (int j = 0; j < ps.count; ++j) z[j] = normal(rng_);
+    const Draw& dr = draws[i];
+    BodyState child = particles_[dr.a];
+    for (int j = dr.g; j < dr.d; ++j) child[ps.first + j] = particles_[dr.b][ps.first + j];
     Tangent step = Tangent::Zero();
-    step.segment(ps.first, ps.count) = L * z;
+    step.segment(ps.first, ps.count) = L * dr.z;
     child = fromTangent(child, step);
     limits_.enforce(&child);
     scratch_[i] = child;
@@ -196,16 +217,22 @@ void Papf::propagate() {
       params_.noise_upper_arm, params_.noise_upper_arm, params_.noise_shoulder_shift,
       params_.noise_forearm, params_.noise_forearm;
   const Tangent drift = params_.velocity_damping * velocity_;
+  // Draws first, in a fixed order; the conversions in parallel; the arm proposals (which draw
+  // too) in order; the limits in parallel.
+  std::vector<int> from(n), propose(n, -1);
+  std::vector<Tangent> z(n);
   for (int i = 0; i < n; ++i) {
-    BodyState x = particles_[drawIndex(u0 + static_cast<double>(i) / n)];
-    Tangent z;
-    for (int j = 0; j < kTangentDim; ++j) z[j] = drift[j] + b[j] * (2.0 * uni(rng_) - 1.0);
-    x = fromTangent(x, z);
-    if (uni(rng_) < params_.proposal_fraction)
-      proposeArm(uni(rng_) < 0.5 ? Side::LEFT : Side::RIGHT, &x, &uni);
-    limits_.enforce(&x);
-    scratch_[i] = x;
+    from[i] = drawIndex(u0 + static_cast<double>(i) / n);
+    for (int j = 0; j < kTangentDim; ++j) z[i][j] = drift[j] + b[j] * (2.0 * uni(rng_) - 1.0);
+    if (uni(rng_) < params_.proposal_fraction) propose[i] = uni(rng_) < 0.5 ? 0 : 1;
   }
+  const int threads = std::max(1, params_.threads);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int i = 0; i < n; ++i) scratch_[i] = fromTangent(particles_[from[i]], z[i]);
+  for (int i = 0; i < n; ++i)
+    if (propose[i] >= 0) proposeArm(static_cast<Side>(propose[i]), &scratch_[i], &uni);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int i = 0; i < n; ++i) limits_.enforce(&scratch_[i]);
   particles_.swap(scratch_);
 }
 

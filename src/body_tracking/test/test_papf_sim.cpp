@@ -74,11 +74,11 @@ struct Stats {
 };
 
 // Bars: the are 16 mm (hands), 15 mm (head) and 25 mm (elbows); the thesis measured
-// 32.1 mm for the hands on real data. What the defaults measure on this sequence (docs/benchmarks.md) is hands 20.3 mm, head 12.4 mm, elbows 35.4 mm, shoulders 33.7 mm (seeds 1 and 2: hands 22.0
-// and 19.7, head 12.2 and 13.8, elbows 38.9 and 35.9): the
-// hands and elbows miss the bars (a few frames of each fast reach lag behind, and the
-// mean-likelihood observation pulls the shoulders ~2 cm into the trunk). The bars below guard
-// today's figures with ~35 % margin, because the volumes, and with them the particle
+// 32.1 mm for the hands on real data. What the defaults measure on this sequence (seed 3) is
+// hands 22.1 mm, head 12.5 mm, elbows 36.3 mm, shoulders 35.2 mm (other seeds within ~2 mm):
+// the hands and elbows miss the bars (a few frames of each fast reach lag behind, and
+// the mean-likelihood observation pulls the shoulders ~2 cm into the trunk). The bars below
+// guard today's figures with ~30 % margin, because the volumes, and with them the particle
 // trajectories, differ slightly between machines (AVX2 and AVX-512 fusion kernels).
 constexpr double kHandMeanBar = 0.028, kHeadMeanBar = 0.017, kElbowMeanBar = 0.048;
 

@@ -38,6 +38,7 @@ inline bool isTrunkPart(Part p) { return p == Part::ABDOMEN || p == Part::CHEST;
 
 using BodyParts = std::array<TruncatedQuadric, kNumParts>;
 
+TruncatedQuadric buildPart(const BodyProfile& profile, const BodyFrames& frames, Part part);
 BodyParts buildParts(const BodyProfile& profile, const BodyFrames& frames);
 inline BodyParts buildParts(const BodyProfile& profile, const BodyState& state) {
   return buildParts(profile, forwardKinematics(profile, state));
