@@ -113,10 +113,10 @@ double Papf::solveBeta(double previous) {
   const double mn = *std::min_element(scores_.begin(), scores_.end());
   double sum = 0;
   for (double s : scores_) sum += s - mn;
-  std::vector<double>& x = cumulative_;  // scratch
+  // weights_ holds x until layerWeights turns it into the layer's weights.
+  std::vector<double>& x = weights_;
   x.resize(n);
   for (int i = 0; i < n; ++i) x[i] = sum > 0 ? params_.weight_scale * (scores_[i] - mn) / sum : 0;
-  weights_.assign(x.begin(), x.end());  // keep x for layerWeights
   const double target = params_.survival_rate;
   double lo = std::log(std::max(previous, 1e-6)) - 2, hi = lo + 4;
   for (int k = 0; k < 30 && survivalRate(x, std::exp(lo)) < target; ++k) lo -= 2;
@@ -404,8 +404,12 @@ const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
     velocity_ = toTangent(previous_state_, estimate_.state);
   }
   if (estimate_.tracking) {
-    estimate_.hands = skin ? refineHands(*skin, estimate_.frames, params_.hands)
-                           : refineHands(psfs::ProbabilityVolume(), estimate_.frames, params_.hands);
+    if (skin) {
+      estimate_.hands = refineHands(*skin, estimate_.frames, params_.hands);
+    } else {
+      estimate_.hands = RefinedHands();
+      estimate_.hands.position = estimate_.frames.hand;
+    }
     ++estimate_.frames_tracked;
     bad_frames_ = (!person || estimate_.score < params_.lost_score) ? bad_frames_ + 1 : 0;
     if (bad_frames_ >= params_.lost_frames) reset();

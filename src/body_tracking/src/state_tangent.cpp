@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include "body_tracking/kinematics.h"
+#include "body_tracking/swing_twist.h"
 
 namespace body_tracking {
 
@@ -13,19 +14,6 @@ using Eigen::Vector2d;
 using Eigen::Vector3d;
 
 namespace {
-
-Vector3d rotationLog(const Quaterniond& q_in) {
-  const Quaterniond q = q_in.w() < 0 ? Quaterniond(-q_in.coeffs()) : q_in;
-  const double s = q.vec().norm();
-  if (s < 1e-12) return 2.0 * q.vec();
-  return 2.0 * std::atan2(s, q.w()) / s * q.vec();
-}
-
-Quaterniond rotationExp(const Vector3d& r) {
-  const double a = r.norm();
-  if (a < 1e-12) return Quaterniond(1, 0.5 * r.x(), 0.5 * r.y(), 0.5 * r.z()).normalized();
-  return Quaterniond(Eigen::AngleAxisd(a, r / a));
-}
 
 // Orthonormal basis of the tangent plane at unit m, a function of m alone.
 void tangentBasis(const Vector3d& m, Vector3d* e1, Vector3d* e2) {

@@ -15,20 +15,6 @@ Quaterniond positive(const Quaterniond& q) {
   return q.w() < 0 ? Quaterniond(-q.w(), -q.x(), -q.y(), -q.z()) : q;
 }
 
-// Rotation vector of a unit quaternion (angle in [0, pi]).
-Vector3d logMap(const Quaterniond& q_in) {
-  const Quaterniond q = positive(q_in);
-  const double s = q.vec().norm();
-  if (s < 1e-12) return 2.0 * q.vec();
-  return 2.0 * std::atan2(s, q.w()) / s * q.vec();
-}
-
-Quaterniond expMap(const Vector3d& r) {
-  const double a = r.norm();
-  if (a < 1e-12) return Quaterniond(1, 0.5 * r.x(), 0.5 * r.y(), 0.5 * r.z()).normalized();
-  return Quaterniond(AngleAxisd(a, r / a));
-}
-
 struct Parts {
   Vector3d swing_vector;  // perpendicular to the axis
   double twist_angle;     // (-pi, pi]
@@ -38,7 +24,7 @@ Parts decompose(const SwingTwistLimit& l, const Quaterniond& q) {
   Quaterniond swing, twist;
   swingTwist(q, l.axis, &swing, &twist);
   Parts p;
-  p.swing_vector = logMap(swing);
+  p.swing_vector = rotationLog(swing);
   p.twist_angle = 2.0 * std::atan2(twist.vec().dot(l.axis), twist.w());
   if (p.twist_angle > M_PI) p.twist_angle -= 2 * M_PI;
   return p;
@@ -51,6 +37,19 @@ double ellipseRadius(const SwingTwistLimit& l, const Vector3d& r) {
 }
 
 }  // namespace
+
+Vector3d rotationLog(const Quaterniond& q_in) {
+  const Quaterniond q = positive(q_in);
+  const double s = q.vec().norm();
+  if (s < 1e-12) return 2.0 * q.vec();
+  return 2.0 * std::atan2(s, q.w()) / s * q.vec();
+}
+
+Quaterniond rotationExp(const Vector3d& r) {
+  const double a = r.norm();
+  if (a < 1e-12) return Quaterniond(1, 0.5 * r.x(), 0.5 * r.y(), 0.5 * r.z()).normalized();
+  return Quaterniond(AngleAxisd(a, r / a));
+}
 
 void swingTwist(const Quaterniond& q_in, const Vector3d& axis, Quaterniond* swing,
                 Quaterniond* twist) {
@@ -75,7 +74,7 @@ Quaterniond SwingTwistLimit::clamp(const Quaterniond& q) const {
   const double r = ellipseRadius(*this, p.swing_vector);
   if (r > 1.0) p.swing_vector /= r;
   p.twist_angle = std::clamp(p.twist_angle, min_twist, max_twist);
-  return expMap(p.swing_vector) * Quaterniond(AngleAxisd(p.twist_angle, axis));
+  return rotationExp(p.swing_vector) * Quaterniond(AngleAxisd(p.twist_angle, axis));
 }
 
 }  // namespace body_tracking

@@ -10,6 +10,10 @@
 
 namespace body_tracking {
 
+// Rotation vector (angle in [0, pi] times the unit axis) of a unit quaternion, and back.
+Eigen::Vector3d rotationLog(const Eigen::Quaterniond& q);
+Eigen::Quaterniond rotationExp(const Eigen::Vector3d& r);
+
 // q = swing * twist; twist about `axis` (unit), swing about an axis perpendicular to it. Both
 // returned with w >= 0. For a half-turn swing (axis flipped), twist is the identity.
 void swingTwist(const Eigen::Quaterniond& q, const Eigen::Vector3d& axis,

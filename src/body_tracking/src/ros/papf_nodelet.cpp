@@ -36,6 +36,7 @@
 #include "body_tracking/papf_config.h"
 #include "body_tracking/silhouette_mask.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
+#include "psfs_reconstruction/ros/volume_pairing.h"
 #include "tabletop_capture/ros/conversions.h"
 #include "tabletop_common/ros/config_overrides.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
@@ -160,19 +161,7 @@ class PapfNodelet : public nodelet::Nodelet {
 
   void pair(const tabletop_msgs::VoxelVolume::ConstPtr& m, bool skin) {
     tabletop_msgs::VoxelVolume::ConstPtr skin_msg, body_msg;
-    {
-      std::lock_guard<std::mutex> lock(pair_mutex_);
-      auto& mine = skin ? pending_skin_ : pending_body_;
-      auto& other = skin ? pending_body_ : pending_skin_;
-      if (other && other->header.stamp == m->header.stamp) {
-        skin_msg = skin ? m : other;
-        body_msg = skin ? other : m;
-        other.reset();
-      } else {
-        mine = m;
-        return;
-      }
-    }
+    if (!pairing_.add(m, skin, &skin_msg, &body_msg)) return;
     process(skin_msg.get(), *body_msg);
   }
 
@@ -393,8 +382,8 @@ class PapfNodelet : public nodelet::Nodelet {
   std::vector<std::unique_ptr<SilhouetteProjector>> projectors_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
-  std::mutex pair_mutex_, mutex_, camera_mutex_;
-  tabletop_msgs::VoxelVolume::ConstPtr pending_skin_, pending_body_;
+  std::mutex mutex_, camera_mutex_;
+  psfs::VolumePairing pairing_;
   psfs::ProbabilityVolume skin_, body_;
   ros::Time last_stamp_;
   bool was_tracking_ = false;

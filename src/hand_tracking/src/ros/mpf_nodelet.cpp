@@ -29,6 +29,7 @@
 #include "hand_tracking/mpf_config.h"
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
+#include "psfs_reconstruction/ros/volume_pairing.h"
 #include "tabletop_common/ros/config_overrides.h"
 #include "tabletop_common/ros/live_tuning.h"
 #include "tabletop_common/ros/periodic_diagnostics.h"
@@ -93,19 +94,7 @@ class MpfNodelet : public nodelet::Nodelet {
 
   void pair(const tabletop_msgs::VoxelVolume::ConstPtr& m, bool skin) {
     tabletop_msgs::VoxelVolume::ConstPtr skin_msg, body_msg;
-    {
-      std::lock_guard<std::mutex> lock(pair_mutex_);
-      auto& mine = skin ? pending_skin_ : pending_body_;
-      auto& other = skin ? pending_body_ : pending_skin_;
-      if (other && other->header.stamp == m->header.stamp) {
-        skin_msg = skin ? m : other;
-        body_msg = skin ? other : m;
-        other.reset();
-      } else {
-        mine = m;
-        return;
-      }
-    }
+    if (!pairing_.add(m, skin, &skin_msg, &body_msg)) return;
     process(*skin_msg, *body_msg);
   }
 
@@ -272,8 +261,8 @@ class MpfNodelet : public nodelet::Nodelet {
   ros::Publisher targets_pub_, markers_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
-  std::mutex pair_mutex_, mutex_;
-  tabletop_msgs::VoxelVolume::ConstPtr pending_skin_, pending_body_;
+  std::mutex mutex_;
+  psfs::VolumePairing pairing_;
   psfs::ProbabilityVolume skin_, body_;
   ros::Time last_stamp_;
   uint64_t time_jumps_ = 0;  // under mutex_
