@@ -1,4 +1,4 @@
-// Private: the per-frame footprint filters of ViewEvidence (issue 17 prototype). Plain integer
+// Private: the per-frame footprint filters of ViewEvidence (issue 17). Plain integer
 // loops that GCC vectorises, compiled once per instruction set (target clones), so every CPU
 // gets the same values; footprint_filter.cpp has the brute-force definitions they must match
 // (test_footprint_fusion checks them).

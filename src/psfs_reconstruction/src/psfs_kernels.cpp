@@ -1,6 +1,7 @@
 #include "psfs_kernels.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -317,22 +318,6 @@ inline void prefetchRow(const PsfsRowParams& p, const uint32_t* centres) {
 }
 
 template <int K>
-__attribute__((target("avx2,fma"))) void rowAvx2(const PsfsRowParams& p, const uint32_t* centres,
-                                                 uint8_t* out) {
-  prefetchRow(p, centres);
-  for (int x0 = 0; x0 < p.nx; x0 += 8) {
-    __m256i sum = _mm256_setzero_si256(), inactive = _mm256_setzero_si256();
-    __m256i m[K > 0 ? K : 1];
-    for (int j = 0; j < K; ++j) m[j] = _mm256_set1_epi32(kNoEv);
-    for (int c = 0; c < p.num_cameras; ++c) {
-      const __m256i uv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(centres + c * p.nxp + x0));
-      accumulateAvx2<K>(centreTermAvx2(p.views[c], uv), sum, inactive, m);
-    }
-    finaliseAvx2<K>(p, sum, inactive, m, out + x0, p.nx - x0);
-  }
-}
-
-template <int K>
 __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, const uint32_t* centres,
                                                      const uint32_t* offsets, uint16_t* yface,
                                                      uint16_t* zface, uint8_t* out) {
@@ -512,26 +497,6 @@ PSFS_AVX512 __m512i centreTerm512(const KernelView& v, __m512i uv) {
   return _mm512_srai_epi32(_mm512_slli_epi32(g, 16), 16);
 }
 
-template <int K>
-__attribute__((target("avx512f,avx512bw,avx2,fma"))) void rowAvx512(const PsfsRowParams& p,
-                                                                  const uint32_t* centres,
-                                                                  uint8_t* out) {
-  prefetchRow(p, centres);
-  for (int x0 = 0; x0 < p.nx; x0 += 16) {
-    // The padded row holds whole chunks of 8: the last step may have only one.
-    const __mmask16 lanes = x0 + 8 < p.nxp ? __mmask16(0xFFFF) : __mmask16(0x00FF);
-    __m512i sum = _mm512_setzero_si512(), inactive = _mm512_setzero_si512();
-    __m512i m[K > 0 ? K : 1];
-    for (int j = 0; j < K; ++j) m[j] = _mm512_set1_epi32(kNoEv);
-    for (int c = 0; c < p.num_cameras; ++c) {
-      // Lanes past the row read 0 (pixel 0): computed, never stored.
-      const __m512i uv = _mm512_maskz_loadu_epi32(lanes, centres + c * p.nxp + x0);
-      accumulate512<K>(centreTerm512(p.views[c], uv), sum, inactive, m);
-    }
-    finalise512<K>(p, sum, inactive, m, out + x0, p.nx - x0);
-  }
-}
-
 // 16 packed centres, or 8 (upper lanes 0) at the end of a row that holds an odd number of
 // chunks. Masked loads only where needed: on Zen 4 a masked load that misses the cache costs
 // several times a plain one (measured without the row prefetch: 15 ms instead of 5 ms for
@@ -619,16 +584,6 @@ bool useAvx512() { return avx512KernelsActive(); }
 #endif
 
 template <int K>
-PsfsRowFn pick(bool vector) {
-#if PSFS_HAVE_X86_DISPATCH
-  if (vector && useAvx512()) return &rowAvx512<K>;
-  if (vector) return &rowAvx2<K>;
-#endif
-  (void)vector;
-  return &rowScalar<K>;
-}
-
-template <int K>
 PsfsFaceRowFn pickFace(bool vector) {
 #if PSFS_HAVE_X86_DISPATCH
   if (vector && useAvx512()) return &faceRowAvx512<K>;
@@ -638,17 +593,30 @@ PsfsFaceRowFn pickFace(bool vector) {
   return &faceRowScalar<K>;
 }
 
+PsfsRowFn referenceRow(int k) {
+  switch (k) {
+    case 0: return &rowScalar<0>;
+    case 1: return &rowScalar<1>;
+    case 2: return &rowScalar<2>;
+    case 3: return &rowScalar<3>;
+    default: return &rowScalar<4>;
+  }
+}
+
+std::atomic<int64_t> g_forced_row_target{0};
+
 }  // namespace
 
+void forceRowKernelForTest(int64_t target) { g_forced_row_target.store(target); }
+
 PsfsRowFn selectPsfsRow(int k, bool vector) {
-  switch (k) {
-    case 0: return pick<0>(vector);
-    case 1: return pick<1>(vector);
-    case 2: return pick<2>(vector);
-    case 3: return pick<3>(vector);
-    case 4: return pick<4>(vector);
-  }
-  throw std::invalid_argument("psfs: occluded_views must be in 0..4");
+  if (k < 0 || k > kMaxOccludedViews) throw std::invalid_argument("psfs: occluded_views must be in 0..4");
+  const int64_t forced = g_forced_row_target.load(std::memory_order_relaxed);
+  if (forced == -1) return referenceRow(k);
+  if (forced != 0) return hwyRowKernel(forced, k);
+  int64_t allowed = hwyPortableTargets();
+  if (vector) allowed = avx512KernelsActive() ? ~int64_t(0) : hwyNoAvx512Targets();
+  return hwyRowKernel(hwyBestTarget(allowed), k);
 }
 
 PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector) {
@@ -695,3 +663,4 @@ int observeByte(const KernelView& view, const uint8_t* likelihood, uint32_t cent
 
 }  // namespace detail
 }  // namespace psfs
+

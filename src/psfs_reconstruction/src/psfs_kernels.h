@@ -1,8 +1,17 @@
-// Private: the per-row inner loops of foreground-class pSfS, scalar, AVX2 and AVX-512. All do
-// the same integer and float operations in the same order, so they produce identical bytes.
+// Private: the per-row inner loops of foreground-class pSfS. All do the same integer and float
+// operations in the same order, so they produce identical bytes.
+//  * Single projection (also the footprint levels and the hand sub-volumes): one Google
+//    Highway source for every instruction set (psfs_row_hwy.cpp), checked against the plain
+//    C++ reference in psfs_kernels.cpp.
+//  * Multi-projection (the shared face samples): scalar, AVX2 and AVX-512 kernels in
+//    psfs_kernels.cpp, still hand-written. Their bilinear samples rest on x86's byte
+//    multiply-adds (maddubs + madd) and, on AVX-512, masked gathers; Highway 1.0 (Debian 12)
+//    has neither, so a port needs the lerp in 32-bit arithmetic (three times the instructions
+//    by count; not yet ported or measured).
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 namespace psfs {
 namespace detail {
@@ -33,8 +42,20 @@ struct PsfsRowParams {
 // Single projection. centres: ProjectionTable::rowCentres.
 using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, uint8_t* out);
 
-// k = occlusion tolerance (0..4). Returns the AVX2 kernel when `vector` (caller checked the CPU).
+// k = occlusion tolerance (0..4). `vector`: the best Highway target the CPU and the
+// TABLETOP_SIMD / force*Kernels() switches allow; else Highway's portable target (EMU128).
 PsfsRowFn selectPsfsRow(int k, bool vector);
+
+// The Highway row kernels (psfs_row_hwy.cpp). Targets are Highway's bits (HWY_AVX2, ...).
+std::vector<int64_t> hwyRowTargets();             // compiled and supported by this CPU
+PsfsRowFn hwyRowKernel(int64_t target, int k);    // target from hwyRowTargets()
+const char* hwyTargetName(int64_t target);
+int64_t hwyBestTarget(int64_t allowed);           // best usable in `allowed`, else the fallback
+int64_t hwyPortableTargets();                     // EMU128 | SCALAR
+int64_t hwyNoAvx512Targets();                     // every target but the AVX-512 ones
+// Tests: selectPsfsRow returns this target's kernel from now on (0: back to normal; -1: the
+// plain C++ reference the Highway kernels must equal byte for byte).
+void forceRowKernelForTest(int64_t target);
 
 constexpr int kMaxOccludedViews = 4;
 

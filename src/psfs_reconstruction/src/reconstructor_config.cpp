@@ -11,7 +11,8 @@ void addFusionKeys(const std::string& section, PsfsOptions* o, tabletop_common::
       .add(k + "occluded_views", &o->occluded_views)
       .add(k + "drop_threshold", &o->drop_threshold)
       .add(k + "min_views", &o->min_views)
-      .add(k + "multi_projection", &o->multi_projection);
+      .add(k + "multi_projection", &o->multi_projection)
+      .add(k + "footprint", &o->footprint);
 }
 
 std::string directoryOf(const std::string& path) {
@@ -52,6 +53,7 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
   addFusionKeys("body", &p.body, s);
   addFusionKeys("skin", &p.skin, s);
   addFusionKeys("hand", &p.hand, s);
+  s->add("fusion/footprint_scale", &p.footprint_scale);
   s->add("hand_volumes/edge", &p.hand_roi_edge)
       .add("hand_volumes/voxels", &p.hand_roi_voxels)
       .add("hand_volumes/topic", &c->nodelet.hand_roi_topic)

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "../src/fusion_common.h"  // private: the face walk, checked against a brute force below
@@ -65,6 +66,54 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
         ASSERT_EQ(t.data, vec.data) << grid.describe() << " multi " << multi << " k " << k << ", "
                                     << threads << " threads";
       }
+    }
+}
+
+// The single-projection row kernel has one Highway source: every target compiled for this
+// CPU (AVX-512, AVX2, SSE4, EMU128 on x86; NEON/SVE elsewhere) writes the bytes of the plain
+// C++ reference, on plain and footprint tables, for every occlusion tolerance, with a masked
+// view, an odd row length and zero_outside_hull.
+TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {
+  const auto rig = tabletop_capture::makeDefaultRig();
+  std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
+  auto cams = rig.cameras;
+  cams[1].fx *= 2.5;  // part of the grid unobserved by camera 1
+  cams[1].fy *= 2.5;
+  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm),
+                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
+  const std::vector<int64_t> targets = detail::hwyRowTargets();
+  ASSERT_FALSE(targets.empty());
+  std::string names;
+  for (int64_t t : targets) names += std::string(" ") + detail::hwyTargetName(t);
+  std::printf("[ figures  ] Highway row targets on this CPU:%s\n", names.c_str());
+  for (const VoxelGrid& grid : grids)
+    for (bool footprint : {false, true}) {
+      ProjectionTableOptions to;
+      to.footprint_levels = footprint ? 3 : 0;
+      const ProjectionTable table(grid, cams, to);
+      ViewEvidence ev;
+      ev.set(views, false, 0, footprint ? FootprintFilter{3, FootprintStatistic::kMedian} : FootprintFilter());
+      for (int k : {0, 1, 2, 4})
+        for (bool zero_outside : {false, true}) {
+          PsfsOptions o;
+          o.footprint = footprint;
+          o.occluded_views = k;
+          o.zero_outside_hull = zero_outside;
+          ProbabilityVolume ref;
+          detail::forceRowKernelForTest(-1);
+          PsfsFusion(o).fuse(table, ev, &ref);
+          for (int64_t t : targets) {
+            detail::forceRowKernelForTest(t);
+            ProbabilityVolume out;
+            PsfsFusion(o).fuse(table, ev, &out);
+            detail::forceRowKernelForTest(0);
+            ASSERT_EQ(out.data, ref.data) << detail::hwyTargetName(t) << ", " << grid.describe()
+                                          << ", footprint " << footprint << ", k " << k
+                                          << ", zero outside " << zero_outside;
+          }
+          detail::forceRowKernelForTest(0);
+          EXPECT_GT(countAbove(ref, thresholdByte(o.threshold)), 100u) << "the spheres are in the hull";
+        }
     }
 }
 

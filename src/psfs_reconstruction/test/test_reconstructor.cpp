@@ -341,6 +341,7 @@ void expectSameFusion(const PsfsOptions& a, const PsfsOptions& b, const char* wh
   EXPECT_EQ(a.drop_threshold, b.drop_threshold) << what;
   EXPECT_EQ(a.min_views, b.min_views) << what;
   EXPECT_EQ(a.multi_projection, b.multi_projection) << what;
+  EXPECT_EQ(a.footprint, b.footprint) << what;
 }
 
 // config/psfs.yaml documents the defaults: it must say what the code does.
@@ -358,6 +359,7 @@ TEST(ReconstructorConfig, ShippedFileMatchesTheDefaults) {
   expectSameFusion(c.params.body, d.body, "body");
   expectSameFusion(c.params.skin, d.skin, "skin");
   expectSameFusion(c.params.hand, d.hand, "hand");
+  EXPECT_EQ(c.params.footprint_scale, d.footprint_scale);
   EXPECT_EQ(c.params.hand_roi_edge, d.hand_roi_edge);
   EXPECT_EQ(c.params.hand_roi_voxels, d.hand_roi_voxels);
   EXPECT_EQ(c.params.update_background, d.update_background);

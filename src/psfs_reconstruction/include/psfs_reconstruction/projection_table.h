@@ -18,7 +18,7 @@
 // at B's centre - B's offset (see psfs_kernels.h). So a voxel costs 3 bilinear lookups per
 // camera, not 6.
 //
-// Footprint levels (issue 17 prototype, off by default): instead of sampling the voxel's
+// Footprint levels (ReconstructorParams body/skin.footprint): instead of sampling the voxel's
 // footprint per voxel, the evidence images are filtered to footprints of a few sizes once per
 // frame (ViewEvidence, FootprintFilter), stacked one above the other, and each voxel's packed
 // centre points into the level that matches its projected width. Then fusion is the

@@ -26,7 +26,7 @@
 // face is sampled once (ProjectionTable): 3 lookups per voxel and camera instead of 6, for the
 // 64x64x48 volume's 2 ms target on 2 cores (see docs/benchmarks.md (bench_fusion)).
 // On the simulated rig the hull quality is unchanged within +-0.01 IoU.
-// Footprint-filtered evidence (PsfsOptions::footprint, issue 17 prototype, off by default):
+// Footprint-filtered evidence (PsfsOptions::footprint; psfs.yaml fusion/*/footprint):
 // the footprint statistic comes from evidence images filtered once per frame (ViewEvidence,
 // FootprintFilter) and a table that points each voxel at the window of its projected size
 // (ProjectionTableOptions::footprint_levels), so fusion is the single-projection kernel, one
@@ -85,7 +85,7 @@ struct PsfsOptions {
   double drop_threshold = 0.0;  // 0 = threshold
   int min_views = 2;            // >= 1
   bool multi_projection = false;   // needs a table and evidence built for it
-  // Footprint-filtered evidence (issue 17 prototype; exclusive with multi_projection): the
+  // Footprint-filtered evidence (exclusive with multi_projection): the
   // single-projection kernel reads, per voxel and camera, the evidence filtered over a window
   // matched to the voxel's projected size. Needs a table built with footprint_levels and
   // evidence set with a FootprintFilter of at least as many levels.

@@ -41,8 +41,11 @@ struct ReconstructorParams {
   PixelClassifierParams classifier;
   BackgroundModelParams background;
   // Volume of the body and skin volumes (DESIGN.md section 3 user space) and its resolution.
-  // 64x64x48 (15.6 mm) is the tracking resolution of the thesis; it needs the multi-projection
-  // test, which body/skin options switch on by default.
+  // 64x64x48 (15.6 mm) is the tracking resolution of the thesis; a voxel that large spans
+  // several pixels, so its evidence must cover its footprint: the body/skin options use the
+  // thesis' multi-projection test by default. Footprint-filtered evidence (body/skin.footprint)
+  // costs a half to a third of it with a better body hull, but the trackers were tuned on the
+  // multi-projection volumes (docs/benchmarks.md, "pSfS footprint-filtered evidence").
   Workspace workspace;
   Eigen::Vector3i dims{64, 64, 48};
   // Expected occupancy of the workspace by the foreground hull P(H_F) and by the skin-coloured
@@ -58,8 +61,8 @@ struct ReconstructorParams {
   PsfsOptions body = defaultBody();
   PsfsOptions skin = defaultSkin();
   PsfsOptions hand = defaultHand();
-  // Footprint-filtered evidence (issue 17 prototype, used only where body.footprint and
-  // skin.footprint are set; both or neither, since they share one table): the filters of each class
+  // Footprint-filtered evidence (used where body.footprint and skin.footprint are set; both
+  // or neither, since they share one table): the filters of each class
   // and the workspace table's level choice (ProjectionTableOptions::footprint_scale). Hand
   // sub-volumes always read level 0, the plain terms.
   FootprintFilter body_footprint{3, FootprintStatistic::kMedian};

@@ -13,7 +13,7 @@
 //    (what the thesis got from the GPU's texture unit). Two bytes per pixel rather than a
 //    packed 2x2 quad per pixel keeps the 8 views' images (1.4 MB) near the core's L2.
 //  * likelihood: the plain bytes, for the reference variants (all-classes, binary SfS).
-//  * footprint levels (FootprintFilter, issue 17 prototype, off by default): terms holds L term
+//  * footprint levels (FootprintFilter; ReconstructorParams body/skin.footprint): terms holds L term
 //    images one above the other, level l at row l * (height + 1) (each followed by a guard row
 //    of "no evidence"): level 0 the plain terms, level l the terms of the likelihood filtered
 //    over a (2l + 1)^2 window. A projection table built with footprint levels points each voxel
