@@ -136,10 +136,13 @@ class RawClient {
     websocket::close_reason close;
   };
 
-  explicit RawClient(uint16_t port, int receive_buffer = 0) : ws_(ioc_) {
+  // source: the local address to connect from (any of 127.0.0.0/8 on Linux's loopback).
+  explicit RawClient(uint16_t port, int receive_buffer = 0, const std::string& source = "")
+      : ws_(ioc_) {
     tcp::socket& s = ws_.next_layer();
     s.open(tcp::v4());
     if (receive_buffer > 0) s.set_option(net::socket_base::receive_buffer_size(receive_buffer));
+    if (!source.empty()) s.bind(tcp::endpoint(net::ip::make_address(source), 0));
     s.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
     ws_.handshake("127.0.0.1", "/ws");
   }
@@ -531,6 +534,7 @@ TEST(RoomServer, OversizedMessageClosesOnlyItsSender) {
 TEST(RoomServer, StalledClientDoesNotStallOthers) {
   RoomServerOptions o = loopback();
   o.stall_timeout = 1.0;
+  o.max_sender_messages_per_s = o.max_sender_bytes_per_s = 0;  // a flood on purpose
   RoomServer server(o);
   server.start();
   Inbox ia, ib;
@@ -680,7 +684,8 @@ TEST(RoomServer, BrowserOrigins) {
   EXPECT_EQ(upgradeStatus(server.port(), "http://" + rebound, rebound), 403);
 }
 
-// Unjoined connections time out; max_clients is enforced with an error, not a hang.
+// Unjoined connections time out; max_clients (joined participants) is enforced at the join
+// with an error, not a hang.
 TEST(RoomServer, JoinTimeoutAndServerFull) {
   RoomServerOptions o = loopback();
   o.join_timeout = 0.3;
@@ -688,13 +693,109 @@ TEST(RoomServer, JoinTimeoutAndServerFull) {
   RoomServer server(o);
   server.start();
   RawClient idle(server.port());
-  Inbox ia;
+  Inbox ia, ib;
   auto a = joined(&ia, clientOptions(server.port(), "r1", "a"));
+  auto b = joined(&ib, clientOptions(server.port(), "r2", "b"));
   RawClient third(server.port());
+  third.join("r1");
   EXPECT_EQ(third.readErrorAndClose(websocket::close_code::try_again_later), "server_full");
   EXPECT_EQ(idle.readErrorAndClose(websocket::close_code::policy_error), "join_timeout");
   EXPECT_EQ(kicked(server, "join_timeout"), 1u);
   EXPECT_TRUE(a->connected());  // joined in time, not affected
+}
+
+// Issue 19: 400 connections that never join (a flood from one address, then from 50 others)
+// cannot lock participants out: each address keeps at most max_pending_per_address waiting,
+// the server at most max_pending, the oldest waiting ones are evicted, and a join from the
+// flooding address or another one gets its welcome.
+TEST(RoomServer, IdleConnectionsCannotLockOutParticipants) {
+  RoomServerOptions o = loopback();
+  o.max_pending = 64;
+  o.max_pending_per_address = 8;
+  o.join_timeout = 60.0;  // the flood stays until evicted
+  RoomServer server(o);
+  server.start();
+  try {
+    RawClient probe(server.port(), 0, "127.0.0.2");
+  } catch (const std::exception& e) {
+    GTEST_SKIP() << "cannot connect from 127.0.0.2 on this machine's loopback: " << e.what();
+  }
+  std::vector<std::unique_ptr<RawClient>> flood;
+  for (int i = 0; i < 200; ++i) flood.push_back(std::make_unique<RawClient>(server.port(), 0, "127.0.0.2"));
+  for (int i = 0; i < 200; ++i)
+    flood.push_back(std::make_unique<RawClient>(server.port(), 0, "127.0.0." + std::to_string(3 + i / 4)));
+  // Evictions run on the victims' strands: wait for the count to settle.
+  const auto t0 = Clock::now();
+  while (server.stats().pending > o.max_pending && Clock::now() - t0 < 5s) std::this_thread::sleep_for(10ms);
+  const RoomServerStats st = server.stats();
+  std::printf("after 400 idle connections: %zu waiting to join, %llu evicted\n", st.pending,
+              (unsigned long long)kicked(server, "evicted"));
+  EXPECT_LE(st.pending, o.max_pending);
+  // 200 from 127.0.0.2 keep 8; the other 200 (4 per address) keep the rest of the 64.
+  EXPECT_GE(kicked(server, "evicted"), 400u - o.max_pending);
+  // The newest of the flood were not evicted; the oldest was, with the documented reason.
+  EXPECT_EQ(flood.front()->readErrorAndClose(websocket::close_code::try_again_later), "evicted");
+  Inbox ia;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "legit"));  // from 127.0.0.1
+  EXPECT_TRUE(a->connected());
+  RawClient same(server.port(), 0, "127.0.0.2");  // behind the flooding address (NAT)
+  ASSERT_FALSE(same.join("r1"));
+  const room::ServerMessage w = same.readWelcome();
+  EXPECT_EQ(w.type, room::ServerMessage::Type::kWelcome);
+  EXPECT_EQ(server.stats().participants.size(), 2u);
+}
+
+// Issue 19: a sender over its message rate or bandwidth has the excess dropped at the server
+// and counted; the others in the room are unaffected, and within its rate nothing is lost.
+TEST(RoomServer, SenderRateAndBandwidthLimits) {
+  RoomServerOptions o = loopback();
+  o.max_sender_messages_per_s = 50;  // buckets of 50 messages
+  o.max_sender_bytes_per_s = 40000;  // and 40 kB
+  o.queue_length = 1000;
+  RoomServer server(o);
+  server.start();
+  Inbox ia, ib, ic;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "a"));
+  auto b = joined(&ib, clientOptions(server.port(), "r1", "b"));
+  auto c = joined(&ic, clientOptions(server.port(), "r1", "c"));
+  const uint32_t ida = a->self().id, idc = c->self().id;
+  // 200 small messages back to back: the bucket passes its 50 and whatever refills meanwhile.
+  const auto t0 = Clock::now();
+  for (uint32_t i = 0; i < 200; ++i) ASSERT_TRUE(a->send(makePayload(i, 64)));
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  // c sends 20 messages at 25 Hz, well within its own allowance.
+  for (uint32_t i = 0; i < 20; ++i) {
+    ASSERT_TRUE(c->send(makePayload(i, 64)));
+    std::this_thread::sleep_for(40ms);
+  }
+  expectHands(ib, idc, 20);
+  const auto dropsOf = [&](uint32_t id) {
+    for (const auto& p : server.stats().participants)
+      if (p.id == id) return p.rate_dropped;
+    return uint64_t(0);
+  };
+  ASSERT_TRUE(ib.waitFor([&] { return ib.handsFrom(ida) + dropsOf(ida) >= 200; }));
+  const size_t passed = ib.handsFrom(ida);
+  std::printf("rate: %zu of 200 passed (sent in %.3f s), %llu dropped\n", passed, seconds,
+              (unsigned long long)dropsOf(ida));
+  // 50 in the bucket plus the refill while sending (and while the server read them).
+  EXPECT_GE(passed, 50u);
+  EXPECT_LE(passed, 50u + size_t(50 * (seconds + 1.0)));
+  EXPECT_EQ(passed + dropsOf(ida), 200u);
+  EXPECT_EQ(dropsOf(idc), 0u);
+  EXPECT_EQ(server.stats().rate_dropped, dropsOf(ida));
+  EXPECT_EQ(ic.handsFrom(ida), passed);  // every receiver got the same ones
+  // Bandwidth: 10 kB messages against a 40 kB bucket (the message bucket is full again).
+  std::this_thread::sleep_for(1100ms);
+  const uint64_t before = dropsOf(ida);
+  for (uint32_t i = 0; i < 20; ++i) ASSERT_TRUE(a->send(makePayload(1000 + i, 10000)));
+  ASSERT_TRUE(ib.waitFor([&] { return ib.handsFrom(ida) + dropsOf(ida) >= 220; }));
+  const size_t big = ib.handsFrom(ida) - passed;
+  std::printf("bandwidth: %zu of 20 x 10 kB passed\n", big);
+  EXPECT_GE(big, 4u);
+  EXPECT_LE(big, 8u);  // 4 from the bucket, a few from the refill (4 kB per 100 ms)
+  EXPECT_EQ(dropsOf(ida) - before, 20u - big);
+  EXPECT_TRUE(a->connected() && b->connected() && c->connected());
 }
 
 // Keep-alive: the server pings every idle_timeout / 2 and drops a peer that has sent nothing
@@ -732,7 +833,9 @@ TEST(RoomServer, IdlePeersAreDropped) {
 
 // (h) stop() with joined, unjoined and stalled clients returns promptly and tells the clients.
 TEST(RoomServer, StopWithConnectedClientsIsPrompt) {
-  auto server = std::make_unique<RoomServer>(loopback());
+  RoomServerOptions o = loopback();
+  o.max_sender_messages_per_s = o.max_sender_bytes_per_s = 0;  // a flood on purpose
+  auto server = std::make_unique<RoomServer>(o);
   server->start();
   const uint16_t port = server->port();
   Inbox ia, ib;

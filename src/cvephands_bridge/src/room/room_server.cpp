@@ -25,6 +25,10 @@ ServerCore::ServerCore(const RoomServerOptions& options) : options_(options) {
     throw std::invalid_argument("RoomServer: max_message_size < 1");
   if (options_.seats.seats < 1) throw std::invalid_argument("RoomServer: seats < 1");
   if (options_.threads < 1) throw std::invalid_argument("RoomServer: threads < 1");
+  if (options_.max_pending < 1 || options_.max_pending_per_address < 1)
+    throw std::invalid_argument("RoomServer: max_pending and max_pending_per_address must be >= 1");
+  if (!(options_.max_sender_messages_per_s >= 0) || !(options_.max_sender_bytes_per_s >= 0))
+    throw std::invalid_argument("RoomServer: sender rate limits must be >= 0 (0: none)");
   if (!(options_.stall_timeout > 0) || !(options_.join_timeout > 0) || options_.idle_timeout < 0)
     throw std::invalid_argument("RoomServer: timeouts must be positive");
 }
@@ -99,7 +103,7 @@ void ServerCore::stop() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!running_) return;
     stopping_ = true;  // connections accepted from now on close at once
-    for (const auto& c : connections_) live.push_back(c.second);
+    for (const auto& c : connections_) live.push_back(c.second.weak);
   }
   net::post(acceptor_->get_executor(), [this] {
     beast::error_code ignored;
@@ -150,19 +154,58 @@ bool ServerCore::originAllowed(const http::request<http::string_body>& req) cons
 }
 
 Admission ServerCore::registerConnection(Connection* c, std::weak_ptr<Connection> weak,
-                                         bool websocket) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (stopping_) return Admission::kStopping;
-  size_t& count = websocket ? websockets_ : https_;
-  const size_t limit = websocket ? options_.max_clients : options_.max_http_connections;
-  connections_[c] = std::move(weak);
-  ++count;
-  return count > limit ? Admission::kFull : Admission::kOk;
+                                         bool websocket, const std::string& address) {
+  std::shared_ptr<Connection> victim;  // evicted outside the lock
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopping_) return Admission::kStopping;
+    Registered& r = connections_[c];
+    r.weak = std::move(weak);
+    r.order = next_order_++;
+    if (!websocket) {
+      ++https_;
+      return https_ > options_.max_http_connections ? Admission::kFull : Admission::kOk;
+    }
+    ++websockets_;
+    // A full address, or else a full server, gives up its oldest pending connection (a linear
+    // search: max_pending is small and this is rare).
+    const size_t from_address = pending_by_address_.count(address) ? pending_by_address_[address] : 0;
+    const bool address_full = from_address >= options_.max_pending_per_address;
+    if (address_full || pending_ >= options_.max_pending) {
+      Registered* oldest = nullptr;
+      for (auto& e : connections_)
+        if (e.second.pending && (!address_full || e.second.address == address) &&
+            (!oldest || e.second.order < oldest->order))
+          oldest = &e.second;
+      if (oldest) {
+        unpendLocked(*oldest);
+        victim = oldest->weak.lock();
+      }
+    }
+    r.pending = true;
+    r.address = address;
+    ++pending_by_address_[address];
+    ++pending_;
+  }
+  if (victim) victim->evict();
+  return Admission::kOk;
+}
+
+void ServerCore::unpendLocked(Registered& r) {
+  if (!r.pending) return;
+  r.pending = false;
+  --pending_;
+  const auto it = pending_by_address_.find(r.address);
+  if (it != pending_by_address_.end() && --it->second == 0) pending_by_address_.erase(it);
 }
 
 void ServerCore::unregisterConnection(Connection* c, bool websocket) {
   std::lock_guard<std::mutex> lock(mutex_);
-  connections_.erase(c);
+  const auto it = connections_.find(c);
+  if (it == connections_.end()) return;
+  unpendLocked(it->second);
+  if (it->second.joined) --joined_;
+  connections_.erase(it);
   --(websocket ? websockets_ : https_);
 }
 

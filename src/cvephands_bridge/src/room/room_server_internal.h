@@ -1,6 +1,7 @@
 // Private to the room server files: the connection classes, ServerCore and what they share.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -48,20 +49,48 @@ class Connection {
  public:
   virtual ~Connection() = default;
   virtual void shutdown() = 0;  // any thread
+  // Closed to make room for a newer connection (a WebSocket that has not joined; any thread).
+  virtual void evict() {}
 };
 
 enum class Admission { kOk, kFull, kStopping };
+
+// Per-sender token buckets (RoomServerOptions::max_sender_*), on the sender's strand.
+class SenderRateLimit {
+ public:
+  SenderRateLimit(double messages_per_s, double bytes_per_s)
+      : message_rate_(messages_per_s), byte_rate_(bytes_per_s),
+        messages_(messages_per_s), bytes_(bytes_per_s) {}
+  // True if a message of `size` bytes may pass at `now` (and takes it from the buckets).
+  bool admit(size_t size, Clock::time_point now) {
+    const double dt = started_ ? std::chrono::duration<double>(now - last_).count() : 0.0;
+    started_ = true;
+    last_ = now;
+    if (message_rate_ > 0) messages_ = std::min(message_rate_, messages_ + dt * message_rate_);
+    if (byte_rate_ > 0) bytes_ = std::min(byte_rate_, bytes_ + dt * byte_rate_);
+    const bool ok = (message_rate_ <= 0 || messages_ >= 1.0) &&
+                    (byte_rate_ <= 0 || bytes_ >= static_cast<double>(size));
+    if (ok) messages_ -= 1.0, bytes_ -= static_cast<double>(size);
+    return ok;
+  }
+
+ private:
+  double message_rate_, byte_rate_;
+  double messages_, bytes_;  // tokens: start full (one second's worth)
+  bool started_ = false;
+  Clock::time_point last_;
+};
 
 // One WebSocket participant. All its state lives on its strand (the socket's executor); other
 // connections reach it only through deliver() and shutdown(), which post there.
 class WsSession : public Connection, public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(ServerCore& server, beast::tcp_stream&& stream)
-      : server_(server), ws_(std::move(stream)), timer_(ws_.get_executor()) {}
+  WsSession(ServerCore& server, beast::tcp_stream&& stream);
   ~WsSession() override;
 
   void run(http::request<http::string_body> upgrade);
   void shutdown() override;
+  void evict() override;
   // Queue a message for this client (any thread).
   void deliver(Bytes message, bool binary);
 
@@ -71,7 +100,8 @@ class WsSession : public Connection, public std::enable_shared_from_this<WsSessi
   room::Role role = room::Role::kRig;
   int seat = -1;
   uint32_t sequence = 0;  // binary messages received (relay header)
-  std::atomic<uint64_t> messages_in{0}, bytes_in{0}, messages_out{0}, bytes_out{0}, dropped{0};
+  std::atomic<uint64_t> messages_in{0}, bytes_in{0}, messages_out{0}, bytes_out{0}, dropped{0},
+      rate_dropped{0};
   std::atomic<size_t> queued{0};
 
  private:
@@ -82,7 +112,7 @@ class WsSession : public Connection, public std::enable_shared_from_this<WsSessi
     websocket::close_reason close_reason;
   };
 
-  void onAccept(beast::error_code ec, bool full);
+  void onAccept(beast::error_code ec, Admission admission);
   void doRead();
   void onRead(beast::error_code ec);
   void handleText(std::string_view text);
@@ -107,6 +137,8 @@ class WsSession : public Connection, public std::enable_shared_from_this<WsSessi
   bool writing_ = false;
   Clock::time_point write_started_;
   bool registered_ = false, joined_ = false, closing_ = false, dead_ = false;
+  bool accepted_ = false, evicted_ = false;  // WebSocket handshake done; evicted during it
+  SenderRateLimit rate_;
 };
 
 // Plain HTTP on a freshly accepted socket (room_server_http.cpp): static files, and the upgrade
@@ -125,7 +157,10 @@ class ServerCore {
   const std::filesystem::path& root() const { return root_; }
   RoomServerStats stats() const;
 
-  Admission registerConnection(Connection* c, std::weak_ptr<Connection> weak, bool websocket);
+  // A WebSocket registers as pending (not joined) from `address`; at max_pending the oldest
+  // pending one is evicted. HTTP connections pass an empty address.
+  Admission registerConnection(Connection* c, std::weak_ptr<Connection> weak, bool websocket,
+                               const std::string& address = std::string());
   void unregisterConnection(Connection* c, bool websocket);
   bool originAllowed(const http::request<http::string_body>& req) const;
   bool tokenOk(const std::string& given) const;
@@ -136,7 +171,7 @@ class ServerCore {
   void leave(WsSession* s);
   void relay(WsSession& sender, const beast::flat_buffer& payload);
   void countKick(const std::string& reason);
-  std::atomic<uint64_t> dropped{0}, http_requests{0}, connections{0};
+  std::atomic<uint64_t> dropped{0}, rate_dropped{0}, http_requests{0}, connections{0};
 
  private:
   struct Totals {
@@ -164,8 +199,18 @@ class ServerCore {
 
   mutable std::mutex mutex_;  // everything below
   bool running_ = false, stopping_ = false;
-  std::unordered_map<Connection*, std::weak_ptr<Connection>> connections_;
-  size_t websockets_ = 0, https_ = 0;
+  struct Registered {
+    std::weak_ptr<Connection> weak;
+    bool pending = false;  // a WebSocket that has not joined (and is not being evicted)
+    bool joined = false;
+    std::string address;
+    uint64_t order = 0;    // admission order: the oldest pending is evicted first
+  };
+  std::unordered_map<Connection*, Registered> connections_;
+  size_t websockets_ = 0, https_ = 0, pending_ = 0, joined_ = 0;
+  std::map<std::string, size_t> pending_by_address_;
+  uint64_t next_order_ = 0;
+  void unpendLocked(Registered& r);  // under mutex_
   std::map<std::string, Room> rooms_;
   std::map<std::string, uint64_t> kicked_;
   uint32_t next_id_ = 1;

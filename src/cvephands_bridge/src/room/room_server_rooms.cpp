@@ -31,6 +31,17 @@ bool ServerCore::join(const std::shared_ptr<WsSession>& s, const room::JoinReque
   std::vector<std::shared_ptr<WsSession>> others;
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    const auto reg = connections_.find(s.get());
+    if (reg == connections_.end()) {  // not registered: the server is stopping
+      *reason = "shutdown";
+      *detail = "the server is stopping";
+      return false;
+    }
+    if (joined_ >= options_.max_clients) {
+      *reason = "server_full";
+      *detail = "the server has its maximum of " + std::to_string(options_.max_clients) + " participants";
+      return false;
+    }
     Room& r = rooms_[request.room];
     if (r.seat_taken.empty()) r.seat_taken.assign(options_.seats.seats, false);
     int seat = -1;
@@ -50,6 +61,9 @@ bool ServerCore::join(const std::shared_ptr<WsSession>& s, const room::JoinReque
     s->name = request.name.empty() ? "participant " + std::to_string(s->id) : request.name;
     s->role = request.role;
     s->seat = seat;
+    unpendLocked(reg->second);
+    reg->second.joined = true;
+    ++joined_;
     r.members.push_back(s);  // ids only grow: stays sorted
     r.snapshot = std::make_shared<const std::vector<std::shared_ptr<WsSession>>>(r.members);
     self.id = s->id;
@@ -123,8 +137,10 @@ RoomServerStats ServerCore::stats() const {
   st.connections = connections;
   st.http_requests = http_requests;
   st.dropped = dropped;
+  st.rate_dropped = rate_dropped;
   std::lock_guard<std::mutex> lock(mutex_);
   st.kicked = kicked_;
+  st.pending = pending_;
   for (const auto& [name, r] : rooms_) {
     RoomStats rs;
     rs.name = name;
@@ -143,6 +159,7 @@ RoomServerStats ServerCore::stats() const {
       p.messages_out = m->messages_out;
       p.bytes_out = m->bytes_out;
       p.dropped = m->dropped;
+      p.rate_dropped = m->rate_dropped;
       p.queued = m->queued;
       st.participants.push_back(std::move(p));
     }

@@ -19,6 +19,7 @@ constexpr auto kSlowWrite = std::chrono::milliseconds(50);
 constexpr size_t kBurstFactor = 4;
 // Control messages are never dropped; this many waiting means the client is not reading.
 constexpr size_t kMaxControlBacklog = 256;
+constexpr const char* kEvictedDetail = "too many connections wait to join: the oldest one is closed";
 
 Clock::duration toDuration(double seconds) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -26,7 +27,7 @@ Clock::duration toDuration(double seconds) {
 
 websocket::close_code closeCodeFor(const std::string& reason) {
   if (reason == "too_large") return websocket::close_code::too_big;
-  if (reason == "room_full" || reason == "server_full")
+  if (reason == "room_full" || reason == "server_full" || reason == "evicted")
     return websocket::close_code::try_again_later;
   if (reason == "shutdown") return websocket::close_code::going_away;
   return websocket::close_code::policy_error;
@@ -34,13 +35,20 @@ websocket::close_code closeCodeFor(const std::string& reason) {
 
 }  // namespace
 
+WsSession::WsSession(ServerCore& server, beast::tcp_stream&& stream)
+    : server_(server), ws_(std::move(stream)), timer_(ws_.get_executor()),
+      rate_(server.options().max_sender_messages_per_s, server.options().max_sender_bytes_per_s) {}
+
 WsSession::~WsSession() {
   if (registered_) server_.unregisterConnection(this, true);
 }
 
 void WsSession::run(http::request<http::string_body> upgrade) {
   upgrade_ = std::move(upgrade);
-  const Admission admission = server_.registerConnection(this, weak_from_this(), true);
+  beast::error_code ec;
+  const auto remote = beast::get_lowest_layer(ws_).socket().remote_endpoint(ec);
+  const std::string address = ec ? std::string("?") : remote.address().to_string();
+  const Admission admission = server_.registerConnection(this, weak_from_this(), true, address);
   if (admission == Admission::kStopping) {
     beast::get_lowest_layer(ws_).close();
     return;
@@ -57,13 +65,16 @@ void WsSession::run(http::request<http::string_body> upgrade) {
       [](websocket::response_type& res) { res.set(http::field::server, "cvephands-room"); }));
   ws_.read_message_max(0);   // enforced in onRead, so the client gets an error message first
   ws_.auto_fragment(false);  // one frame per message
-  ws_.async_accept(upgrade_, [self = shared_from_this(), full = admission == Admission::kFull](
-                                 beast::error_code ec) { self->onAccept(ec, full); });
+  ws_.async_accept(upgrade_, [self = shared_from_this(), admission](beast::error_code ec) {
+    self->onAccept(ec, admission);
+  });
 }
 
-void WsSession::onAccept(beast::error_code ec, bool full) {
+void WsSession::onAccept(beast::error_code ec, Admission admission) {
   if (ec) return end();
-  if (full) return kick("server_full", "the server has its maximum number of clients");
+  accepted_ = true;
+  if (evicted_) return kick("evicted", kEvictedDetail);
+  if (admission != Admission::kOk) return kick("server_full", "the server has its maximum number of clients");
   timer_.expires_after(toDuration(server_.options().join_timeout));
   timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
     if (!ec && !self->joined_ && !self->closing_)
@@ -130,6 +141,11 @@ void WsSession::handleText(std::string_view text) {
 void WsSession::handleBinary() {
   if (!joined_) return kick("not_joined", "binary message before join");
   if (role == room::Role::kViewer) return kick("viewer_cannot_send", "viewers only watch");
+  if (!rate_.admit(in_.size(), Clock::now())) {
+    ++rate_dropped;
+    ++server_.rate_dropped;
+    return;
+  }
   server_.relay(*this, in_);
 }
 
@@ -235,6 +251,17 @@ void WsSession::shutdown() {
     self->timer_.async_wait([self](beast::error_code ec) {
       if (!ec) self->end();
     });
+  });
+}
+
+void WsSession::evict() {
+  net::post(ws_.get_executor(), [self = shared_from_this()] {
+    if (self->joined_ || self->closing_) return;
+    if (!self->accepted_) {
+      self->evicted_ = true;  // still in the handshake: onAccept closes it
+      return;
+    }
+    self->kick("evicted", kEvictedDetail);
   });
 }
 

@@ -2,9 +2,11 @@
 // streams between the participants of each room and serves the browser client.
 //
 //   room_server [--bind ADDR] [--port N] [--token T] [--static DIR] [--seats N] [--status S]
+//               [--max-clients N] [--max-pending N] [--max-pending-per-address N]
+//               [--max-rate N] [--max-bandwidth B]
 //
-// Prints a status line every --status seconds (rooms, participants, messages, drops) and stops
-// cleanly on SIGINT / SIGTERM. Arguments starting with "__" (what roslaunch appends: __name:=,
+// Prints a status line every --status seconds (rooms, participants, connections waiting to
+// join, messages, drops) and stops cleanly on SIGINT / SIGTERM. Arguments starting with "__" (what roslaunch appends: __name:=,
 // __log:=) are ignored, so launch files can start it as a node.
 //
 // Without --static it serves the browser client it finds (defaultStaticRoot): the installed one
@@ -53,6 +55,8 @@ void usage() {
   std::fprintf(stderr,
                "usage: room_server [--bind ADDR] [--port N] [--token T] [--static DIR] [--seats N] "
                "[--status S]\n"
+               "                   [--max-clients N] [--max-pending N] [--max-pending-per-address N]\n"
+               "                   [--max-rate N] [--max-bandwidth B]\n"
                "  --bind    address to listen on (default 127.0.0.1; 0.0.0.0 for every interface)\n"
                "  --port    TCP port of HTTP + WebSocket (default 8765; 0 = any free port)\n"
                "  --token   shared token every participant must send (default: none)\n"
@@ -60,7 +64,14 @@ void usage() {
                "            installed share/cvephands_bridge/web/dist beside this program, else\n"
                "            the source tree's web/dist; \"\" = serve no files)\n"
                "  --seats   seats per room around the virtual table (default 6)\n"
-               "  --status  seconds between status lines (default 5; 0 = none)\n");
+               "  --status  seconds between status lines (default 5; 0 = none)\n"
+               "  --max-clients N    joined participants, all rooms (default 64)\n"
+               "  --max-pending N    connections waiting to join, in all (default 64) and\n"
+               "  --max-pending-per-address N   from one address (default 8); one more and the\n"
+               "                     oldest waiting one is closed (\"evicted\")\n"
+               "  --max-rate N       hand messages/s per sender (default 200; 0 = no limit)\n"
+               "  --max-bandwidth B  bytes/s per sender (default 16e6; 0 = no limit); beyond\n"
+               "                     either, a sender's messages are dropped and counted\n");
 }
 
 }  // namespace
@@ -81,6 +92,12 @@ int main(int argc, char** argv) {
     }
     else if (args.is("--seats")) o.seats.seats = static_cast<int>(args.integer(1, 1024));
     else if (args.is("--status")) status = args.number(0.0);
+    else if (args.is("--max-clients")) o.max_clients = static_cast<size_t>(args.integer(1, 100000));
+    else if (args.is("--max-pending")) o.max_pending = static_cast<size_t>(args.integer(1, 100000));
+    else if (args.is("--max-pending-per-address"))
+      o.max_pending_per_address = static_cast<size_t>(args.integer(1, 100000));
+    else if (args.is("--max-rate")) o.max_sender_messages_per_s = args.number(0.0);
+    else if (args.is("--max-bandwidth")) o.max_sender_bytes_per_s = args.number(0.0);
     else if (args.help()) {
       usage();
       return 0;
@@ -132,10 +149,12 @@ int main(int argc, char** argv) {
     for (const auto& r : s.rooms) in += r.messages_in;
     uint64_t kicked = 0;
     for (const auto& k : s.kicked) kicked += k.second;
-    std::printf("[room_server] %zu room(s), %zu participant(s), %llu hand messages in, %llu "
-                "dropped for slow readers, %llu connection(s) closed for errors\n",
-                s.rooms.size(), s.participants.size(), static_cast<unsigned long long>(in),
-                static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(kicked));
+    std::printf("[room_server] %zu room(s), %zu participant(s), %zu waiting to join, %llu hand "
+                "messages in, %llu dropped for slow readers, %llu over senders' rates, %llu "
+                "connection(s) closed for errors\n",
+                s.rooms.size(), s.participants.size(), s.pending, static_cast<unsigned long long>(in),
+                static_cast<unsigned long long>(s.dropped),
+                static_cast<unsigned long long>(s.rate_dropped), static_cast<unsigned long long>(kicked));
     std::fflush(stdout);
   }
   server.stop();

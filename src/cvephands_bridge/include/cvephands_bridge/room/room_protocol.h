@@ -53,6 +53,8 @@
 //         too_large     message over the max message size                            (1009)
 //         room_full     all seats of the room are taken                              (1013)
 //         server_full   max clients reached                                          (1013)
+//         evicted       closed before its join to admit a newer connection: the oldest of
+//                       those waiting to join from its address, or from all      (1013)
 //         join_timeout  no join within 10 s                                          (1008)
 //         slow_client   the client stopped reading (its queue stayed full)   (no message: the
 //                       socket is closed at once, as nothing can be written to it)

@@ -47,8 +47,23 @@ struct RoomServerOptions {
   // oldest is dropped. A receiver that keeps up may queue 4x as many during a burst.
   size_t queue_length = 16;
   double stall_timeout = 5.0;        // s: a receiver whose write is stuck this long is closed
-  size_t max_clients = 64;           // WebSocket connections (joined or not)
+  size_t max_clients = 64;           // joined participants (rigs and viewers), all rooms
+  // WebSocket connections that have not joined yet have their own limits, so that idle or
+  // slow handshakes cannot take the seats of participants: at most max_pending_per_address
+  // from one IP address and max_pending in all. One more, and the OLDEST pending connection
+  // (of that address, or of all) is closed with "evicted": a real client joins within
+  // milliseconds of its handshake, so the idle ones go first, and a rig behind the same
+  // address (NAT) as a flood still gets in.
+  size_t max_pending = 64;
+  size_t max_pending_per_address = 8;
   size_t max_http_connections = 32;  // plain HTTP connections (the browser's file requests)
+  // Per sender: hand messages per second and bytes per second, each a token bucket holding
+  // one second's worth (so a burst of up to a second's allowance passes). Messages beyond
+  // either are dropped at the server (not relayed) and counted in ParticipantStats::rate_dropped.
+  // 0 = no limit. The defaults pass the densest codec (raw, ~12.5 MB/s for two hands at 25 fps)
+  // and stop a sender from flooding a room.
+  double max_sender_messages_per_s = 200.0;
+  double max_sender_bytes_per_s = 16e6;
   double join_timeout = room::kJoinTimeoutSeconds;  // s from the handshake to the join
   // A client silent for half to all of this (s) is closed: the server pings it at half this
   // period and browsers and RoomClient answer on their own. 0: never (and no pings).
@@ -65,6 +80,7 @@ struct ParticipantStats {
   uint64_t messages_in = 0, bytes_in = 0;    // hand messages received from it
   uint64_t messages_out = 0, bytes_out = 0;  // messages written to it (all kinds)
   uint64_t dropped = 0;                      // hand messages dropped for it (slow reader)
+  uint64_t rate_dropped = 0;                 // its own hand messages dropped (over its rate)
   size_t queued = 0;                         // messages waiting for it now
 };
 
@@ -81,6 +97,8 @@ struct RoomServerStats {
   uint64_t connections = 0;                    // TCP connections accepted
   uint64_t http_requests = 0;                  // plain HTTP requests answered (files and errors)
   uint64_t dropped = 0;                        // hand messages dropped, all receivers ever
+  uint64_t rate_dropped = 0;                   // hand messages dropped over senders' rates
+  size_t pending = 0;                          // WebSocket connections not joined yet (now)
   // Connections the server closed, by error reason (room_protocol.h), e.g. "slow_client".
   std::map<std::string, uint64_t> kicked;
 };
