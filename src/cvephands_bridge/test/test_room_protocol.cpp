@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "cvephands_bridge/room/reconnect_backoff.h"
 #include "cvephands_bridge/room/room_protocol.h"
 #include "cvephands_bridge/room/static_files.h"
 
@@ -270,5 +271,26 @@ TEST(StaticFiles, ContentTypes) {
   EXPECT_STREQ(contentTypeFor("Makefile"), "application/octet-stream");
 }
 
+}  // namespace
+}  // namespace cvephands
+
+// The rigs' reconnect back-off (the browser client's retryDelayMs has the same sequence).
+namespace cvephands {
+namespace {
+TEST(ReconnectBackoff, DoublesUpToTheMaximumAndStartsOverAfterASuccess) {
+  ReconnectBackoff b(2.0, 30.0);
+  EXPECT_EQ(b.failed(), 2.0);
+  EXPECT_EQ(b.failed(), 4.0);
+  EXPECT_EQ(b.failed(), 8.0);
+  EXPECT_EQ(b.failed(), 16.0);
+  EXPECT_EQ(b.failed(), 30.0);
+  EXPECT_EQ(b.failed(), 30.0);
+  EXPECT_EQ(b.failures(), 6);
+  b.succeeded();
+  EXPECT_EQ(b.failures(), 0);
+  EXPECT_EQ(b.failed(), 2.0);
+  EXPECT_THROW(ReconnectBackoff(0.0, 1.0), std::invalid_argument);
+  EXPECT_THROW(ReconnectBackoff(2.0, 1.0), std::invalid_argument);
+}
 }  // namespace
 }  // namespace cvephands

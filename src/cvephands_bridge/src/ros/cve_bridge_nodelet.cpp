@@ -27,6 +27,7 @@
 #include <tabletop_msgs/MultiViewFrame.h>
 #include <tabletop_msgs/TrackedTargets.h>
 
+#include "cvephands_bridge/room/reconnect_backoff.h"
 #include "cvephands_bridge/room/room_client.h"
 #include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "cvephands_bridge/video/face_video.h"
@@ -46,7 +47,7 @@ class CveBridgeNodelet : public nodelet::Nodelet {
         [this](diagnostic_updater::DiagnosticStatusWrapper& stat) { diagnose(stat); });
 
     int port = 8765, bits = 2, keyframes = 25, queue = 16;
-    double reconnect = 2.0;
+    double reconnect = 2.0, reconnect_max = 30.0;
     options_.host = "127.0.0.1";
     options_.join.room = "tabletop";
     options_.join.name = "rig";
@@ -65,6 +66,7 @@ class CveBridgeNodelet : public nodelet::Nodelet {
           .add("code_bits", &bits)
           .add("keyframe_interval", &keyframes)
           .add("reconnect_interval", &reconnect)
+          .add("reconnect_max_interval", &reconnect_max)
           .add("face_video", &face_video_)
           .add("face_video_fps", &face_fps_)
           .add("face_video_size", &face_options_.size)
@@ -89,6 +91,9 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       encoder_options_.validate();
       if (port < 1 || port > 65535) throw std::invalid_argument("server_port must be in 1..65535");
       if (!(reconnect > 0.0)) throw std::invalid_argument("reconnect_interval must be > 0");
+      if (!(reconnect_max >= reconnect))
+        throw std::invalid_argument("reconnect_max_interval must be >= reconnect_interval");
+      backoff_ = std::make_unique<ReconnectBackoff>(reconnect, reconnect_max);
       if (queue < 1) throw std::invalid_argument("send_queue must be >= 1");
       if (!(options_.connect_timeout > 0.0)) throw std::invalid_argument("connect_timeout must be > 0");
       face_options_.validate();
@@ -101,6 +106,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     boost::function<void(const ros::WallTimerEvent&)> on_connect = [this](const ros::WallTimerEvent&) {
       ensureConnected();
     };
+    // The timer ticks at the first interval; after failures, ticks are skipped until the
+    // back-off's next attempt (reconnect_interval doubling up to reconnect_max_interval).
     connect_timer_ = nh.createWallTimer(ros::WallDuration(reconnect), on_connect);
     // Sets are dropped only at the pSfS gate; later stages queue enough never to drop one.
     sub_ = nh.subscribe("psfs/hand_volumes", 10, &CveBridgeNodelet::onVolumes, this);
@@ -118,16 +125,23 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       std::lock_guard<std::mutex> lock(mutex_);
       if (client_ && client_->connected()) return;
     }
+    const ros::WallTime now = ros::WallTime::now();
+    if (now + ros::WallDuration(0.05) < next_attempt_) return;  // backing off (timer slack)
     auto client = std::make_shared<RoomClient>(options_);
     std::string error;
     if (!client->connect(&error)) {
-      NODELET_WARN_THROTTLE(30.0, "cve_bridge: cannot join room '%s' at %s:%u: %s (retrying)",
+      const double wait = backoff_->failed();
+      next_attempt_ = now + ros::WallDuration(wait);
+      NODELET_WARN_THROTTLE(30.0, "cve_bridge: cannot join room '%s' at %s:%u: %s (%d failed "
+                            "attempts, next in %.0f s)",
                             options_.join.room.c_str(), options_.host.c_str(), options_.port,
-                            error.c_str());
+                            error.c_str(), backoff_->failures(), wait);
       std::lock_guard<std::mutex> lock(mutex_);
       last_error_ = error;
       return;
     }
+    backoff_->succeeded();
+    next_attempt_ = ros::WallTime();
     const room::ParticipantInfo self = client->self();
     NODELET_INFO("cve_bridge: joined room '%s' as participant %u, seat %d",
                  options_.join.room.c_str(), self.id, self.seat);
@@ -272,6 +286,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   std::map<uint32_t, HandStreamEncoder> encoders_;
   HandFrame frame_;
   std::string fatal_, last_error_;
+  std::unique_ptr<ReconnectBackoff> backoff_;
+  ros::WallTime next_attempt_;  // timer thread only
   ros::Subscriber sub_;
   std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
   ros::WallTimer connect_timer_;

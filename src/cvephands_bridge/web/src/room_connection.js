@@ -1,11 +1,20 @@
 // The browser side of the room protocol (include/cvephands_bridge/room/room_protocol.h): joins a
 // room as a viewer (no seat, never sends hands), follows the membership, measures the clock
 // offset to the server with pings and hands every relayed binary frame to a callback.
-// Reconnects on its own unless the server refused us for good (bad token, bad join).
+// Reconnects on its own unless the server refused us for good (bad token, bad join), backing
+// off exponentially (retryDelayMs) so that a room server that restarts is not hammered by every
+// open page.
 
 export const RELAY_HEADER_SIZE = 32;
 const RELAY_MAGIC = [0x43, 0x56, 0x52, 0x4d]; // "CVRM"
 const FATAL_REASONS = new Set(['bad_token', 'bad_join', 'malformed', 'unknown_type']);
+
+// Wait before reconnect attempt `failures` (1 = after the first failure): 1 s, 2 s, 4 s, ...
+// up to 30 s; a successful join starts again at 1 s. The same as the rigs' bridge
+// (include/cvephands_bridge/room/reconnect_backoff.h), and deterministic like it.
+export function retryDelayMs(failures, initialMs = 1000, maxMs = 30000) {
+  return Math.min(maxMs, initialMs * 2 ** Math.max(0, Math.min(failures - 1, 30)));
+}
 
 // Wall clock in milliseconds since the Unix epoch with sub-millisecond resolution.
 export function nowMs() {
@@ -48,6 +57,7 @@ export class RoomConnection {
     this.ws = null;
     this.pingTimer = null;
     this.retryTimer = null;
+    this.failures = 0; // connection attempts that ended without a join, in a row
     this.pingId = 0;
     this.pending = new Map();
     this.stopped = false;
@@ -103,6 +113,7 @@ export class RoomConnection {
       }
       if (msg.type === 'welcome') {
         this.selfId = msg.participant;
+        this.failures = 0;
         this.setState('joined', `room ${msg.room}`);
         this.ping();
         clearInterval(this.pingTimer);
@@ -118,12 +129,15 @@ export class RoomConnection {
       }
     };
     ws.onclose = (ev) => {
+      const wasJoined = this.state === 'joined';
       clearInterval(this.pingTimer);
       this.participants = [];
       if (this.options.onParticipants) this.options.onParticipants([], 0);
       if (this.state !== 'error') this.setState('closed', ev.reason || `code ${ev.code}`);
       if (this.stopped || fatal) return;
-      this.retryTimer = setTimeout(() => this.connect(), 2000);
+      // A connection that was joined retries at once-ish (1 s); failed attempts back off.
+      if (!wasJoined) this.failures += 1;
+      this.retryTimer = setTimeout(() => this.connect(), retryDelayMs(Math.max(1, this.failures)));
     };
   }
 
