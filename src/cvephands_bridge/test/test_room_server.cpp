@@ -818,17 +818,66 @@ TEST(RoomServer, IdlePeersAreDropped) {
   EXPECT_TRUE(a->connected());
   EXPECT_EQ(server.stats().participants.size(), 1u);
 
-  o.idle_timeout = 0;  // a server that never pings: as good as gone for a quiet client
+  // A server that never pings (idle_timeout 0) still answers the client's own pings: a quiet
+  // client stays.
+  o.idle_timeout = 0;
   RoomServer quiet(o);
   quiet.start();
   Inbox ib;
   co.port = quiet.port();
   co.idle_timeout = 0.3;
-  const auto t0 = Clock::now();
   auto b = joined(&ib, co);
-  EXPECT_TRUE(ib.waitFor([&] { return !ib.closed.empty(); }, 2000ms));
+  std::this_thread::sleep_for(1000ms);
+  EXPECT_TRUE(b->connected()) << b->closeReason();
+
+  // A server that welcomes and then says nothing at all (gone from the network) is left after
+  // the client's idle_timeout.
+  net::io_context ioc;
+  tcp::acceptor acceptor(ioc, tcp::endpoint(net::ip::make_address("127.0.0.1"), 0));
+  std::thread mute_server([&] {
+    websocket::stream<tcp::socket> ws(ioc);
+    acceptor.accept(ws.next_layer());
+    ws.accept();
+    beast::flat_buffer buf;
+    ws.read(buf);  // the join
+    room::ParticipantInfo self;
+    self.id = 1;
+    ws.text(true);
+    ws.write(net::buffer(room::encodeWelcome("r1", self, 6, room::nowMicros())));
+    beast::error_code ec;
+    while (!ec) ws.read(buf, ec);  // pings unanswered, until the client leaves
+  });
+  Inbox ic;
+  co.port = acceptor.local_endpoint().port();
+  const auto t0 = Clock::now();
+  auto c = joined(&ic, co);
+  EXPECT_TRUE(ic.waitFor([&] { return !ic.closed.empty(); }, 2000ms));
   EXPECT_GT(Clock::now() - t0, 250ms);
-  EXPECT_FALSE(b->connected());
+  EXPECT_FALSE(c->connected());
+  EXPECT_EQ(c->closeReason().rfind("idle_timeout", 0), 0u) << c->closeReason();
+  c->close();
+  mute_server.join();
+}
+
+// A rig alone in its room only sends: the server never has a reason to ping it (it hears the
+// rig all the time) and nothing is relayed to it. Its own pings keep it from timing out (it
+// did every idle_timeout, and reconnected).
+TEST(RoomServer, LoneSendingRigStaysConnected) {
+  RoomServerOptions o = loopback();
+  o.idle_timeout = 0.4;
+  RoomServer server(o);
+  server.start();
+  Inbox ia;
+  RoomClientOptions co = clientOptions(server.port(), "r1", "a");
+  co.idle_timeout = 0.4;
+  auto a = joined(&ia, co);
+  for (uint32_t i = 0; i < 40; ++i) {  // 2 s at 20 Hz
+    ASSERT_TRUE(a->send(makePayload(i, 64))) << a->closeReason();
+    std::this_thread::sleep_for(50ms);
+  }
+  EXPECT_TRUE(a->connected()) << a->closeReason();
+  ASSERT_EQ(server.stats().participants.size(), 1u);
+  EXPECT_EQ(server.stats().participants[0].messages_in, 40u);
 }
 
 // (h) stop() with joined, unjoined and stalled clients returns promptly and tells the clients.

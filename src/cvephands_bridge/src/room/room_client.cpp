@@ -91,15 +91,22 @@ struct RoomClient::Impl {
   void heard() { last_heard = std::chrono::steady_clock::now(); }
 
   // A server that vanished without closing (network gone) is noticed here: nothing, not even
-  // its pings (every 15 s by default), for idle_timeout.
+  // its pings or pongs, for idle_timeout. The server pings only a client it has not heard from,
+  // so a rig that only sends (alone in its room) would hear nothing at all: after half the
+  // timeout in silence the client asks for a pong itself.
   void armIdle() {
     if (!(options.idle_timeout > 0)) return;
     idle_timer.expires_after(toDuration(options.idle_timeout / 4));
     idle_timer.async_wait([this](beast::error_code ec) {
       if (ec || ended || closing) return;
-      if (std::chrono::steady_clock::now() - last_heard > toDuration(options.idle_timeout))
+      const auto quiet = std::chrono::steady_clock::now() - last_heard;
+      if (quiet > toDuration(options.idle_timeout))
         return end("idle_timeout: nothing from the server for " +
                    std::to_string(options.idle_timeout) + " s");
+      if (quiet > toDuration(options.idle_timeout / 2) && connected) {
+        ping_due = true;
+        if (!writing) writeNext();
+      }
       armIdle();
     });
   }
@@ -168,6 +175,18 @@ struct RoomClient::Impl {
   void writeNext() {
     if (ended) return;
     if (close_requested) return doClose();
+    if (ping_due) {  // a keep-alive ping goes before the next hand message
+      ping_due = false;
+      ping_text = room::encodePing(std::to_string(++pings));
+      writing = true;
+      ws.text(true);
+      ws.async_write(net::buffer(ping_text), [this](beast::error_code ec, size_t) {
+        writing = false;
+        if (ec) return end("write: " + ec.message());
+        writeNext();
+      });
+      return;
+    }
     if (queue.empty()) return;
     in_flight = std::move(queue.front());
     queue.pop_front();
@@ -236,6 +255,9 @@ struct RoomClient::Impl {
   std::deque<Payload> queue;
   Payload in_flight;
   bool writing = false, handshaken = false, closing = false, ended = false, settled = false;
+  bool ping_due = false;  // a keep-alive ping waits for the writer (armIdle)
+  std::string ping_text;  // the one being written
+  uint64_t pings = 0;
   bool close_requested = false;
   std::string server_error;
   std::promise<std::string> joined;  // "" or the reason connect() failed
