@@ -745,6 +745,42 @@ TEST(RoomServer, IdleConnectionsCannotLockOutParticipants) {
   EXPECT_EQ(server.stats().participants.size(), 2u);
 }
 
+// One layer down: TCP connections that never send their HTTP request (every WebSocket starts
+// as one) cannot lock the server either: the oldest of them are evicted, and the browser's
+// page and a rig's join still get through.
+TEST(RoomServer, SilentTcpConnectionsCannotLockOutParticipants) {
+  RoomServerOptions o = loopback();
+  o.max_http_connections = 32;
+  o.max_pending_per_address = 8;
+  RoomServer server(o);
+  server.start();
+  net::io_context ioc;
+  std::vector<std::unique_ptr<tcp::socket>> silent;
+  const auto open = [&](const std::string& source) {
+    auto s = std::make_unique<tcp::socket>(ioc);
+    s->open(tcp::v4());
+    s->bind(tcp::endpoint(net::ip::make_address(source), 0));
+    s->connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server.port()));
+    silent.push_back(std::move(s));
+  };
+  try {
+    for (int i = 0; i < 100; ++i) open("127.0.0.1");  // the legitimate clients' own address
+    for (int i = 0; i < 200; ++i) open("127.0.0." + std::to_string(2 + i / 8));
+  } catch (const std::exception& e) {
+    GTEST_SKIP() << "cannot connect from 127.0.0.x on this machine's loopback: " << e.what();
+  }
+  const auto t0 = Clock::now();
+  while (kicked(server, "evicted_http") < 300u - o.max_http_connections && Clock::now() - t0 < 5s)
+    std::this_thread::sleep_for(10ms);
+  std::printf("after 300 silent TCP connections: %llu evicted\n",
+              (unsigned long long)kicked(server, "evicted_http"));
+  EXPECT_GE(kicked(server, "evicted_http"), 300u - o.max_http_connections);
+  Inbox ia;
+  auto a = joined(&ia, clientOptions(server.port(), "r1", "legit"));
+  EXPECT_TRUE(a->connected());
+  EXPECT_EQ(httpGet(server.port(), "/ws").status, 426);  // plain HTTP answered too
+}
+
 // Issue 19: a sender over its message rate or bandwidth has the excess dropped at the server
 // and counted; the others in the room are unaffected, and within its rate nothing is lost.
 TEST(RoomServer, SenderRateAndBandwidthLimits) {

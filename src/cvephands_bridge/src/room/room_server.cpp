@@ -25,8 +25,9 @@ ServerCore::ServerCore(const RoomServerOptions& options) : options_(options) {
     throw std::invalid_argument("RoomServer: max_message_size < 1");
   if (options_.seats.seats < 1) throw std::invalid_argument("RoomServer: seats < 1");
   if (options_.threads < 1) throw std::invalid_argument("RoomServer: threads < 1");
-  if (options_.max_pending < 1 || options_.max_pending_per_address < 1)
-    throw std::invalid_argument("RoomServer: max_pending and max_pending_per_address must be >= 1");
+  if (options_.max_pending < 1 || options_.max_pending_per_address < 1 || options_.max_http_connections < 1)
+    throw std::invalid_argument(
+        "RoomServer: max_pending, max_pending_per_address and max_http_connections must be >= 1");
   if (!(options_.max_sender_messages_per_s >= 0) || !(options_.max_sender_bytes_per_s >= 0))
     throw std::invalid_argument("RoomServer: sender rate limits must be >= 0 (0: none)");
   if (!(options_.stall_timeout > 0) || !(options_.join_timeout > 0) || options_.idle_timeout < 0)
@@ -162,30 +163,33 @@ Admission ServerCore::registerConnection(Connection* c, std::weak_ptr<Connection
     Registered& r = connections_[c];
     r.weak = std::move(weak);
     r.order = next_order_++;
-    if (!websocket) {
-      ++https_;
-      return https_ > options_.max_http_connections ? Admission::kFull : Admission::kOk;
-    }
-    ++websockets_;
-    // A full address, or else a full server, gives up its oldest pending connection (a linear
-    // search: max_pending is small and this is rare).
-    const size_t from_address = pending_by_address_.count(address) ? pending_by_address_[address] : 0;
-    const bool address_full = from_address >= options_.max_pending_per_address;
-    if (address_full || pending_ >= options_.max_pending) {
+    r.websocket = websocket;
+    r.address = address;
+    ++(websocket ? websockets_ : https_);
+    // Every connection starts as plain HTTP (the WebSocket upgrade is an HTTP request), so both
+    // kinds have limits for the waiting ones: HTTP connections (not upgraded) and WebSockets
+    // not joined. A full address, or else a full pool, gives up its oldest waiting connection
+    // (a linear search: the pools are small and this is rare).
+    const int pool = websocket ? 1 : 0;
+    const auto by = pending_by_address_[pool].find(address);
+    const bool address_full =
+        by != pending_by_address_[pool].end() && by->second >= options_.max_pending_per_address;
+    const size_t limit = websocket ? options_.max_pending : options_.max_http_connections;
+    if (address_full || pending_[pool] >= limit) {
       Registered* oldest = nullptr;
       for (auto& e : connections_)
-        if (e.second.pending && (!address_full || e.second.address == address) &&
-            (!oldest || e.second.order < oldest->order))
+        if (e.second.pending && e.second.websocket == websocket &&
+            (!address_full || e.second.address == address) && (!oldest || e.second.order < oldest->order))
           oldest = &e.second;
       if (oldest) {
         unpendLocked(*oldest);
         victim = oldest->weak.lock();
+        ++kicked_[websocket ? "evicted" : "evicted_http"];  // counted when decided
       }
     }
     r.pending = true;
-    r.address = address;
-    ++pending_by_address_[address];
-    ++pending_;
+    ++pending_by_address_[pool][address];
+    ++pending_[pool];
   }
   if (victim) victim->evict();
   return Admission::kOk;
@@ -194,9 +198,10 @@ Admission ServerCore::registerConnection(Connection* c, std::weak_ptr<Connection
 void ServerCore::unpendLocked(Registered& r) {
   if (!r.pending) return;
   r.pending = false;
-  --pending_;
-  const auto it = pending_by_address_.find(r.address);
-  if (it != pending_by_address_.end() && --it->second == 0) pending_by_address_.erase(it);
+  const int pool = r.websocket ? 1 : 0;
+  --pending_[pool];
+  const auto it = pending_by_address_[pool].find(r.address);
+  if (it != pending_by_address_[pool].end() && --it->second == 0) pending_by_address_[pool].erase(it);
 }
 
 void ServerCore::unregisterConnection(Connection* c, bool websocket) {

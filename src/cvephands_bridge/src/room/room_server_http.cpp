@@ -22,6 +22,7 @@ class HttpSession : public Connection, public std::enable_shared_from_this<HttpS
   ~HttpSession() override;
   void run();
   void shutdown() override;
+  void evict() override;
 
  private:
   void doRead();
@@ -47,7 +48,10 @@ HttpSession::~HttpSession() {
 }
 
 void HttpSession::run() {
-  if (server_.registerConnection(this, weak_from_this(), false) != Admission::kOk) {
+  beast::error_code ec;
+  const auto remote = stream_.socket().remote_endpoint(ec);
+  const std::string address = ec ? std::string("?") : remote.address().to_string();
+  if (server_.registerConnection(this, weak_from_this(), false, address) != Admission::kOk) {
     beast::error_code ignored;
     stream_.socket().close(ignored);
     return;
@@ -59,6 +63,14 @@ void HttpSession::run() {
 void HttpSession::shutdown() {
   net::post(strand_, [self = shared_from_this()] {
     if (!self->upgraded_) self->closeSocket();
+  });
+}
+
+// The oldest waiting HTTP connection goes when the pool or its address is full: a client
+// that connects and never sends a request (or trickles one) cannot keep others out.
+void HttpSession::evict() {
+  net::post(strand_, [self = shared_from_this()] {
+    if (!self->upgraded_) self->closeSocket();  // counted by registerConnection
   });
 }
 

@@ -157,8 +157,8 @@ class ServerCore {
   const std::filesystem::path& root() const { return root_; }
   RoomServerStats stats() const;
 
-  // A WebSocket registers as pending (not joined) from `address`; at max_pending the oldest
-  // pending one is evicted. HTTP connections pass an empty address.
+  // A connection registers as waiting (HTTP: not upgraded; WebSocket: not joined) from
+  // `address`; in a full pool or address the oldest waiting one of its kind is evicted.
   Admission registerConnection(Connection* c, std::weak_ptr<Connection> weak, bool websocket,
                                const std::string& address = std::string());
   void unregisterConnection(Connection* c, bool websocket);
@@ -201,14 +201,16 @@ class ServerCore {
   bool running_ = false, stopping_ = false;
   struct Registered {
     std::weak_ptr<Connection> weak;
-    bool pending = false;  // a WebSocket that has not joined (and is not being evicted)
+    bool websocket = false;
+    bool pending = false;  // HTTP not upgraded / WebSocket not joined, and not being evicted
     bool joined = false;
     std::string address;
     uint64_t order = 0;    // admission order: the oldest pending is evicted first
   };
   std::unordered_map<Connection*, Registered> connections_;
-  size_t websockets_ = 0, https_ = 0, pending_ = 0, joined_ = 0;
-  std::map<std::string, size_t> pending_by_address_;
+  size_t websockets_ = 0, https_ = 0, joined_ = 0;
+  size_t pending_[2] = {0, 0};  // waiting connections: [0] HTTP (not upgraded), [1] WebSocket (not joined)
+  std::map<std::string, size_t> pending_by_address_[2];
   uint64_t next_order_ = 0;
   void unpendLocked(Registered& r);  // under mutex_
   std::map<std::string, Room> rooms_;

@@ -140,7 +140,7 @@ RoomServerStats ServerCore::stats() const {
   st.rate_dropped = rate_dropped;
   std::lock_guard<std::mutex> lock(mutex_);
   st.kicked = kicked_;
-  st.pending = pending_;
+  st.pending = pending_[1];
   for (const auto& [name, r] : rooms_) {
     RoomStats rs;
     rs.name = name;

@@ -73,7 +73,7 @@ void WsSession::run(http::request<http::string_body> upgrade) {
 void WsSession::onAccept(beast::error_code ec, Admission admission) {
   if (ec) return end();
   accepted_ = true;
-  if (evicted_) return kick("evicted", kEvictedDetail);
+  if (evicted_) return kick("evicted", kEvictedDetail, kCloseGrace, /*count=*/false);
   if (admission != Admission::kOk) return kick("server_full", "the server has its maximum number of clients");
   timer_.expires_after(toDuration(server_.options().join_timeout));
   timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
@@ -261,7 +261,7 @@ void WsSession::evict() {
       self->evicted_ = true;  // still in the handshake: onAccept closes it
       return;
     }
-    self->kick("evicted", kEvictedDetail);
+    self->kick("evicted", kEvictedDetail, kCloseGrace, /*count=*/false);
   });
 }
 

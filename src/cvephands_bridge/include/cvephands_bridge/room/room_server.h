@@ -56,7 +56,9 @@ struct RoomServerOptions {
   // address (NAT) as a flood still gets in.
   size_t max_pending = 64;
   size_t max_pending_per_address = 8;
-  size_t max_http_connections = 32;  // plain HTTP connections (the browser's file requests)
+  // Plain HTTP connections (the browser's file requests, and every WebSocket before its
+  // upgrade): one more, and the oldest goes, of its address (max_pending_per_address) or of all.
+  size_t max_http_connections = 32;
   // Per sender: hand messages per second and bytes per second, each a token bucket holding
   // one second's worth (so a burst of up to a second's allowance passes). Messages beyond
   // either are dropped at the server (not relayed) and counted in ParticipantStats::rate_dropped.
@@ -99,7 +101,8 @@ struct RoomServerStats {
   uint64_t dropped = 0;                        // hand messages dropped, all receivers ever
   uint64_t rate_dropped = 0;                   // hand messages dropped over senders' rates
   size_t pending = 0;                          // WebSocket connections not joined yet (now)
-  // Connections the server closed, by error reason (room_protocol.h), e.g. "slow_client".
+  // Connections the server closed, by error reason (room_protocol.h), e.g. "slow_client";
+  // "evicted_http": HTTP connections closed for newer ones (no error message: plain HTTP).
   std::map<std::string, uint64_t> kicked;
 };
 
