@@ -64,7 +64,9 @@ setsid roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" frames:=0 lockstep:="
   cve_port:="$PORT" "${EXTRA[@]}" >"$OUT/launch.log" 2>&1 &
 LAUNCH=$!
 stop_launch() {
-  kill -INT -- "-$LAUNCH" 2>/dev/null || true
+  # roslaunch first, which stops its nodes in order (a node signalled on its own before that
+  # would be reported as "process has died"); the whole group only if it hangs.
+  kill -INT "$LAUNCH" 2>/dev/null || true
   for _ in $(seq 1 30); do kill -0 "$LAUNCH" 2>/dev/null || return 0; sleep 1; done
   kill -KILL -- "-$LAUNCH" 2>/dev/null || true
 }

@@ -7,8 +7,9 @@ process), the message rates of a few light topics, and the worst /diagnostics le
 After --minutes it writes into --out:
   soak.csv          one row per sample (time, total RSS, RSS per process, rates, diagnostics)
   soak.svg          memory and rates over time
-  soak_summary.txt  the verdict: RSS growth after the warm-up (linear fit over the run,
-                    extrapolated to its whole length, as a share of the first RSS) < --max-growth,
+  soak_summary.txt  the verdict: RSS growth after the warm-up (the slope of a linear fit over
+                    the judged samples times their span, as a share of the first judged RSS)
+                    < --max-growth,
                     total RSS < --max-rss-mb, pSfS frame sets waiting never above its queue, no
                     /diagnostics status at ERROR or STALE after the warm-up (WARNs are listed)
 and exits 0 when everything holds, 1 otherwise.
@@ -186,7 +187,9 @@ def main():
     a = ap.parse_args(rospy.myargv()[1:])
     os.makedirs(a.out, exist_ok=True)
     rospy.init_node("soak_monitor", anonymous=True, disable_signals=True)
-    rate_topics = [a.ns + t for t in ("/psfs/body_volume", "/hands/targets", "/body/pose", "/cve/hand_meshes")]
+    # Light topics only (a header or a few poses per set): the monitor must not load the pipeline
+    # it measures. psfs/processed: one per frame set pSfS finished.
+    rate_topics = [a.ns + t for t in ("/psfs/processed", "/hands/targets", "/body/pose", "/cve/hand_meshes")]
     counters = [Counter(t) for t in rate_topics]
     diags = Diagnostics()
     samples, processes = [], []

@@ -43,7 +43,8 @@ struct PsfsRowParams {
 using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, uint8_t* out);
 
 // k = occlusion tolerance (0..4). `vector`: the best Highway target the CPU and the
-// TABLETOP_SIMD / force*Kernels() switches allow; else Highway's portable target (EMU128).
+// TABLETOP_SIMD / force*Kernels() switches allow; else Highway's portable target (SCALAR with
+// GCC < 12.3, else EMU128).
 PsfsRowFn selectPsfsRow(int k, bool vector);
 
 // The Highway row kernels (psfs_row_hwy.cpp). Targets are Highway's bits (HWY_AVX2, ...).
@@ -51,7 +52,7 @@ std::vector<int64_t> hwyRowTargets();             // compiled and supported by t
 PsfsRowFn hwyRowKernel(int64_t target, int k);    // target from hwyRowTargets()
 const char* hwyTargetName(int64_t target);
 int64_t hwyBestTarget(int64_t allowed);           // best usable in `allowed`, else the fallback
-int64_t hwyPortableTargets();                     // EMU128 | SCALAR
+int64_t hwyPortableTargets();                     // EMU128 | SCALAR (whichever is built)
 int64_t hwyNoAvx512Targets();                     // every target but the AVX-512 ones
 // Tests: selectPsfsRow returns this target's kernel from now on (0: back to normal; -1: the
 // plain C++ reference the Highway kernels must equal byte for byte).

@@ -1,12 +1,17 @@
 // The single-projection pSfS row kernel (psfs_kernels.h: PsfsRowFn), one source for every
-// instruction set through Google Highway (issue 17): AVX-512, AVX2, SSE4 and NEON/SVE where the
-// compiler targets them, and Highway's portable EMU128 target everywhere else. It serves the
+// instruction set through Google Highway (issue 17): AVX-512, AVX2, SSE4, SSSE3 and NEON where
+// the compiler targets them, and Highway's portable SCALAR target everywhere else (its EMU128
+// needs GCC >= 12.3). SVE and RVV are left out: their vectors are sizeless types, which
+// cannot form the array of the K lowest terms below. It serves the
 // single-projection volumes, the footprint-filtered volumes and the hand sub-volumes. Each
 // target does the integer and float operations of rowScalar (psfs_kernels.cpp, the reference)
 // in the same order, so every target writes the same bytes (test_psfs_fusion_kernels checks
 // all compiled targets against it).
 //
 // Highway re-includes this file once per target (foreach_target.h).
+#ifndef HWY_DISABLED_TARGETS
+#define HWY_DISABLED_TARGETS (HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128 | HWY_RVV)
+#endif
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "psfs_row_hwy.cpp"
 #include <hwy/foreach_target.h>  // must come before highway.h

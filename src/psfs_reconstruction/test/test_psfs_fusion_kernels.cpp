@@ -70,7 +70,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
 }
 
 // The single-projection row kernel has one Highway source: every target compiled for this
-// CPU (AVX-512, AVX2, SSE4, EMU128 on x86; NEON/SVE elsewhere) writes the bytes of the plain
+// CPU (AVX-512, AVX2, SSE4, SSSE3 and SCALAR on x86 with GCC 12; NEON on ARM) writes the bytes of the plain
 // C++ reference, on plain and footprint tables, for every occlusion tolerance, with a masked
 // view, an odd row length and zero_outside_hull.
 TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {

@@ -20,7 +20,10 @@ body=""
 if [ "$rc" -ne 0 ]; then
   fail=$(grep -E '^(\[soak\] )?FAIL' "$WORK/soak_summary.txt" 2>/dev/null | head -n 3 | tr '\n' ' ')
   fail=${fail:-"soak.sh exited with $rc"}
-  body="<failure message=\"$(echo "$fail" | sed 's/&/\&amp;/g; s/</\&lt;/g; s/"/\&quot;/g')\"><![CDATA[$(tail -n 40 "$LOG"; tail -n 40 "$WORK/launch.log" 2>/dev/null)]]></failure>"
+  # The logs carry terminal colour codes: control characters are not allowed in XML.
+  details=$( (tail -n 40 "$LOG"; tail -n 40 "$WORK/launch.log" 2>/dev/null) |
+    sed 's/\x1b\[[0-9;]*m//g' | tr -d '\000-\010\013\014\016-\037' | sed 's/]]>/]] >/g')
+  body="<failure message=\"$(echo "$fail" | sed 's/&/\&amp;/g; s/</\&lt;/g; s/"/\&quot;/g')\"><![CDATA[$details]]></failure>"
 fi
 cat > "$RESULT" <<XML
 <?xml version="1.0" encoding="UTF-8"?>

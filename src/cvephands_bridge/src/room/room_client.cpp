@@ -92,18 +92,19 @@ struct RoomClient::Impl {
 
   // A server that vanished without closing (network gone) is noticed here: nothing, not even
   // its pings or pongs, for idle_timeout. The server pings only a client it has not heard from,
-  // so a rig that only sends (alone in its room) would hear nothing at all: after half the
-  // timeout in silence the client asks for a pong itself.
+  // so a rig that only sends (alone in its room) would hear nothing at all: after a quarter of
+  // the timeout in silence the client asks for a pong itself (checked every eighth: the pong
+  // has at least half the timeout to come back).
   void armIdle() {
     if (!(options.idle_timeout > 0)) return;
-    idle_timer.expires_after(toDuration(options.idle_timeout / 4));
+    idle_timer.expires_after(toDuration(options.idle_timeout / 8));
     idle_timer.async_wait([this](beast::error_code ec) {
       if (ec || ended || closing) return;
       const auto quiet = std::chrono::steady_clock::now() - last_heard;
       if (quiet > toDuration(options.idle_timeout))
         return end("idle_timeout: nothing from the server for " +
                    std::to_string(options.idle_timeout) + " s");
-      if (quiet > toDuration(options.idle_timeout / 2) && connected) {
+      if (quiet > toDuration(options.idle_timeout / 4) && connected && !ping_due) {
         ping_due = true;
         if (!writing) writeNext();
       }

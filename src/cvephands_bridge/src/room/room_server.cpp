@@ -30,6 +30,10 @@ ServerCore::ServerCore(const RoomServerOptions& options) : options_(options) {
         "RoomServer: max_pending, max_pending_per_address and max_http_connections must be >= 1");
   if (!(options_.max_sender_messages_per_s >= 0) || !(options_.max_sender_bytes_per_s >= 0))
     throw std::invalid_argument("RoomServer: sender rate limits must be >= 0 (0: none)");
+  // The byte bucket holds one second's worth: a larger message could never pass.
+  if (options_.max_sender_bytes_per_s > 0 &&
+      options_.max_sender_bytes_per_s < static_cast<double>(options_.max_message_size))
+    throw std::invalid_argument("RoomServer: max_sender_bytes_per_s must be 0 or >= max_message_size");
   if (!(options_.stall_timeout > 0) || !(options_.join_timeout > 0) || options_.idle_timeout < 0)
     throw std::invalid_argument("RoomServer: timeouts must be positive");
 }
@@ -93,6 +97,13 @@ void ServerCore::doAccept() {
           beast::error_code ignored;
           socket.set_option(tcp::no_delay(true), ignored);  // small hand messages: no Nagle delay
           startHttpSession(*this, std::move(socket));
+        } else if (ec == net::error::no_descriptors || ec == net::error::no_buffer_space ||
+                   ec == net::error::no_memory) {
+          // Out of file descriptors (a flood): accepting again at once would spin; the waiting
+          // connections' evictions and timeouts free some meanwhile.
+          auto wait = std::make_shared<net::steady_timer>(acceptor_->get_executor(), std::chrono::milliseconds(100));
+          wait->async_wait([this, wait](beast::error_code) { doAccept(); });
+          return;
         }
         doAccept();
       });

@@ -111,6 +111,13 @@ void WsSession::onRead(beast::error_code ec) {
 }
 
 void WsSession::handleText(std::string_view text) {
+  // Control messages count against the sender's message rate too (a ping flood would keep
+  // the server encoding pongs); over it, they are dropped like hand messages.
+  if (joined_ && !rate_.admit(text.size(), Clock::now())) {
+    ++rate_dropped;
+    ++server_.rate_dropped;
+    return;
+  }
   const room::ClientMessage m = room::parseClientMessage(text);
   switch (m.type) {
     case room::ClientMessage::Type::kInvalid:

@@ -59,9 +59,10 @@ struct RoomServerOptions {
   // Plain HTTP connections (the browser's file requests, and every WebSocket before its
   // upgrade): one more, and the oldest goes, of its address (max_pending_per_address) or of all.
   size_t max_http_connections = 32;
-  // Per sender: hand messages per second and bytes per second, each a token bucket holding
-  // one second's worth (so a burst of up to a second's allowance passes). Messages beyond
-  // either are dropped at the server (not relayed) and counted in ParticipantStats::rate_dropped.
+  // Per sender: messages per second (hands and control messages) and bytes per second, each a
+  // token bucket holding one second's worth (so a burst of up to a second's allowance passes;
+  // the byte rate must be 0 or at least max_message_size). Messages beyond either are dropped
+  // at the server (not relayed or answered) and counted in ParticipantStats::rate_dropped.
   // 0 = no limit. The defaults pass the densest codec (raw, ~12.5 MB/s for two hands at 25 fps)
   // and stop a sender from flooding a room.
   double max_sender_messages_per_s = 200.0;
