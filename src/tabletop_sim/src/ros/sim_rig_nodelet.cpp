@@ -11,6 +11,7 @@
 // for the ack topic's publisher, so the first (background-learning) sets are not missed. An ack
 // that does not come within ~lockstep_timeout seconds is counted and waited for no longer.
 #include <atomic>
+#include <limits>
 #include <condition_variable>
 #include <set>
 #include <memory>
@@ -18,6 +19,7 @@
 #include <thread>
 
 #include <boost/make_shared.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -25,6 +27,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <std_msgs/Header.h>
+#include <std_msgs/String.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include "tabletop_capture/rig_description.h"
@@ -33,6 +36,7 @@
 #include "tabletop_common/ros/periodic_diagnostics.h"
 #include "tabletop_sim/ros/sim_truth_msgs.h"
 #include "tabletop_common/running_stats.h"
+#include "tabletop_sim/camera_faults.h"
 #include "tabletop_sim/simulated_rig.h"
 
 namespace tabletop_sim {
@@ -133,6 +137,8 @@ class SimRigNodelet : public nodelet::Nodelet {
     world_frame_ = rig.world_frame;
     if (lockstep_ > 0)
       ack_sub_ = nh.subscribe(lockstep_topic, 100, &SimRigNodelet::onAck, this);
+    faults_ = std::make_unique<CameraFaults>(static_cast<int>(rig.cameras.size()));
+    fault_sub_ = pnh.subscribe("fault", 10, &SimRigNodelet::onFault, this);
 
     diag_ = std::make_unique<tabletop_common::PeriodicDiagnostics>(
         nh, pnh, getName(), "simulated_rig", "simulated rig",
@@ -148,6 +154,31 @@ class SimRigNodelet : public nodelet::Nodelet {
       NODELET_INFO("simulated rig: scenario %s", sim_->scenario().describe().c_str());
     running_ = true;
     worker_ = std::thread(&SimRigNodelet::run, this);
+  }
+
+  // Fault injection (camera_faults.h): the fault matrix's commands, on ~fault.
+  void onFault(const std_msgs::String::ConstPtr& m) {
+    std::lock_guard<std::mutex> lock(fault_mutex_);
+    try {
+      faults_->command(m->data, ros::WallTime::now().toSec());
+      NODELET_WARN("simulated rig: injecting fault '%s'", m->data.c_str());
+    } catch (const std::exception& e) {
+      NODELET_ERROR("simulated rig: %s", e.what());
+    }
+  }
+
+  // The image as a fault makes it: resized, brighter, in another encoding (from rgb8 only).
+  void applyFault(const CameraFaultEffect& e, const cv::Mat& rendered, cv::Mat* image, std::string* encoding) {
+    cv::Mat m = rendered;
+    if (e.gain != 1.0) rendered.convertTo(m, rendered.type(), e.gain);  // saturating
+    if (e.width > 0) cv::resize(m, m, cv::Size(e.width, e.height), 0, 0, cv::INTER_AREA);
+    if (!e.encoding.empty() && *encoding == "rgb8" && m.channels() == 3) {
+      if (e.encoding == "bgr8") cv::cvtColor(m, m, cv::COLOR_RGB2BGR);
+      if (e.encoding == "mono8") cv::cvtColor(m, m, cv::COLOR_RGB2GRAY);
+      if (e.encoding == "rgba8") cv::cvtColor(m, m, cv::COLOR_RGB2RGBA);
+      *encoding = e.encoding;
+    }
+    *image = m;
   }
 
   void onAck(const std_msgs::Header::ConstPtr& h) {
@@ -226,15 +257,26 @@ class SimRigNodelet : public nodelet::Nodelet {
   }
 
   void publish(const SimFrame& f, const ros::Time& stamp) {
+    const double now = ros::WallTime::now().toSec();
     for (size_t i = 0; i < f.images.size(); ++i) {
+      CameraFaultEffect fault;
+      {
+        std::lock_guard<std::mutex> lock(fault_mutex_);
+        fault = faults_->effect(static_cast<int>(i), now);
+      }
+      if (fault.drop) continue;
+      cv::Mat image = f.images[i];
+      std::string encoding = encoding_;
+      if (fault.any()) applyFault(fault, f.images[i], &image, &encoding);
       sensor_msgs::ImagePtr img(new sensor_msgs::Image);
-      tabletop_capture::toImageMsg(f.images[i], encoding_, img.get());
+      tabletop_capture::toImageMsg(image, encoding, img.get());
       img->header.stamp = stamp;
       img->header.frame_id = infos_[i].header.frame_id;
       img->header.seq = f.index;
       sensor_msgs::CameraInfoPtr info(new sensor_msgs::CameraInfo(infos_[i]));
       info->header.stamp = stamp;
       info->header.seq = f.index;
+      if (fault.nan_info) info->K[0] = info->K[4] = std::numeric_limits<double>::quiet_NaN();
       info_pubs_[i].publish(info);
       image_pubs_[i].publish(img);
     }
@@ -267,6 +309,11 @@ class SimRigNodelet : public nodelet::Nodelet {
     else
       stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "rendering");
     stat.add("frames published", published_);
+    {
+      std::lock_guard<std::mutex> fault_lock(fault_mutex_);
+      const std::string active = faults_ ? faults_->describe(ros::WallTime::now().toSec()) : "";
+      stat.add("injected faults", active.empty() ? "none" : active);
+    }
     stat.add("rate (Hz)", rate);
     stat.add("render time mean (ms)", render_ms_.mean());
     stat.add("render time max (ms)", render_ms_.max());
@@ -279,6 +326,9 @@ class SimRigNodelet : public nodelet::Nodelet {
   }
 
   std::unique_ptr<SimulatedRig> sim_;
+  std::unique_ptr<CameraFaults> faults_;  // under fault_mutex_
+  std::mutex fault_mutex_;
+  ros::Subscriber fault_sub_;
   std::vector<ros::Publisher> image_pubs_, info_pubs_;
   std::vector<sensor_msgs::CameraInfo> infos_;
   ros::Publisher targets_pub_, body_pub_, truth_body_pub_, truth_skin_pub_;

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# Fault matrix (issue 19): runs the whole pipeline on the simulated rig (launch/demo.launch) at
+# the camera rate and injects faults one after the other while it runs (scripts/fault_matrix.py:
+# a camera that stops, switches encoding or size, sends NaN calibration; the light switched
+# on; the room server restarted; a nodelet reloaded). Writes fault_matrix.md / .csv and the
+# launch log into the output folder; exits 0 when nothing crashed and everything recovered.
+set -eo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+usage() {
+  cat <<'USAGE'
+Usage: scripts/fault_matrix.sh [options] [extra roslaunch arg:=value ...]
+  --out DIR       output folder (default ./fault_matrix)
+  --fps N         camera rate of the simulated rig (default 10: a rate a 2-core machine keeps
+                  up with, so that losses are the faults' and not the machine's)
+  --only A,B      only these faults (camera_stops, encoding_switch, size_switch,
+                  camera_info_nan, light_on, room_server_restart, nodelet_reload)
+  --baseline S    seconds of normal running before each fault (default 6)
+  --no-setup      do not run scripts/setup.sh first
+  -h, --help      this text
+USAGE
+}
+OUT="$PWD/fault_matrix"
+FPS=10
+ONLY=""
+SETUP=true
+BASELINE=6
+EXTRA=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) OUT="$2"; shift 2 ;;
+    --fps) FPS="$2"; shift 2 ;;
+    --only) ONLY="$2"; shift 2 ;;
+    --no-setup) SETUP=false; shift ;;
+    --baseline) BASELINE="$2"; shift 2 ;;
+    -h|--help) usage; exit 0 ;;
+    *:=*) EXTRA+=("$1"); shift ;;
+    *) echo "fault_matrix: unknown option '$1'" >&2; usage >&2; exit 2 ;;
+  esac
+done
+mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"
+[ "$SETUP" = true ] && bash "$ROOT/scripts/setup.sh"
+# shellcheck source=ros_env.sh
+source "$ROOT/scripts/ros_env.sh"
+export ROS_LOG_DIR="$OUT/ros_log" ROSCONSOLE_STDOUT_LINE_BUFFERED=1 TABLETOP_ROOT="$ROOT"
+PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+echo "[fault_matrix] $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; rig at $FPS fps; output in $OUT"
+setsid roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" frames:=0 lockstep:=0 fps:="$FPS" \
+  cve_port:="$PORT" "${EXTRA[@]}" >"$OUT/launch.log" 2>&1 &
+LAUNCH=$!
+stop_launch() {
+  kill -INT "$LAUNCH" 2>/dev/null || true
+  for _ in $(seq 1 30); do kill -0 "$LAUNCH" 2>/dev/null || return 0; sleep 1; done
+  kill -KILL -- "-$LAUNCH" 2>/dev/null || true
+}
+trap stop_launch EXIT
+for _ in $(seq 1 60); do
+  rostopic list >/dev/null 2>&1 && break
+  sleep 1
+done
+set +e
+/usr/bin/python3 "$ROOT/scripts/fault_matrix.py" --pid "$LAUNCH" --out "$OUT" --room-port "$PORT" \
+  --log "$OUT/launch.log" --baseline "$BASELINE" \
+  ${ONLY:+--only "$ONLY"}
+rc=$?
+set -e
+stop_launch
+trap - EXIT
+exit "$rc"
