@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include <boost/thread/recursive_mutex.hpp>
 #include <dynamic_reconfigure/server.h>
 #include <ros/ros.h>
 
@@ -34,8 +35,13 @@ class LiveTuning {
         pnh_(pnh) {
     for (const auto& d : ConfigT::__getParamDescriptions__())
       if (!pnh_.hasParam(d->name)) written_.push_back(d->name);
-    server_ = std::make_unique<dynamic_reconfigure::Server<ConfigT>>(pnh_);
-    server_->updateConfig(in_force_);
+    // Our own mutex, held while we push the values in force: without it the server warns (as
+    // the fault matrix's nodelet reload showed) that updateConfig() could race a callback.
+    server_ = std::make_unique<dynamic_reconfigure::Server<ConfigT>>(mutex_, pnh_);
+    {
+      boost::recursive_mutex::scoped_lock lock(mutex_);
+      server_->updateConfig(in_force_);
+    }
     server_->setCallback([this](ConfigT& c, uint32_t /*level*/) { onChange(c); });
   }
 
@@ -60,6 +66,7 @@ class LiveTuning {
   std::string stage_;
   ros::NodeHandle pnh_;
   std::vector<std::string> written_;  // names the server wrote that were not set before it
+  boost::recursive_mutex mutex_;      // the server's (it outlives the server)
   // Last: destroyed first, so that no callback runs on the members above while they go.
   std::unique_ptr<dynamic_reconfigure::Server<ConfigT>> server_;
 };
