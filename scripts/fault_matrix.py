@@ -28,6 +28,9 @@ from rosgraph_msgs.msg import Log
 from std_msgs.msg import Header, String
 from nodelet.srv import NodeletLoad, NodeletUnload
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from proc_tree import pid_of  # noqa: E402
+
 try:
     from tabletop_msgs.msg import TrackedTargets
 except ImportError:  # the devel space not sourced
@@ -91,19 +94,6 @@ class Watch:
         return ""
 
 
-def pid_of(root, label):
-    """The PID of the process under root whose command line names `label` (ROS name or program)."""
-    for pid in processes_of(root):
-        try:
-            with open(f"/proc/{pid}/cmdline", "rb") as f:
-                args = [x.decode(errors="replace") for x in f.read().split(b"\0") if x]
-        except OSError:
-            continue
-        if any(x == "__name:=" + label for x in args) or (args and os.path.basename(args[0]) == label):
-            return pid
-    return None
-
-
 def launch_log_since(path, offset):
     try:
         with open(path, "rb") as f:
@@ -111,26 +101,6 @@ def launch_log_since(path, offset):
             return f.read().decode(errors="replace")
     except OSError:
         return ""
-
-
-def processes_of(root):
-    parent = {}
-    for e in os.listdir("/proc"):
-        if e.isdigit():
-            try:
-                with open(f"/proc/{e}/stat") as f:
-                    s = f.read()
-                parent[int(e)] = int(s[s.rindex(")") + 2:].split()[1])
-            except (OSError, ValueError):
-                pass
-    out, todo = {root}, [root]
-    while todo:
-        p = todo.pop()
-        for c, pp in parent.items():
-            if pp == p and c not in out:
-                out.add(c)
-                todo.append(c)
-    return out
 
 
 def main():

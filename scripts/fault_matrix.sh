@@ -46,25 +46,14 @@ source "$ROOT/scripts/ros_env.sh"
 export ROS_LOG_DIR="$OUT/ros_log" ROSCONSOLE_STDOUT_LINE_BUFFERED=1 TABLETOP_ROOT="$ROOT"
 PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 echo "[fault_matrix] $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; rig at $FPS fps; output in $OUT"
-setsid roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" frames:=0 lockstep:=0 fps:="$FPS" \
-  cve_port:="$PORT" "${EXTRA[@]}" >"$OUT/launch.log" 2>&1 &
-LAUNCH=$!
-stop_launch() {
-  kill -INT "$LAUNCH" 2>/dev/null || true
-  for _ in $(seq 1 30); do kill -0 "$LAUNCH" 2>/dev/null || return 0; sleep 1; done
-  kill -KILL -- "-$LAUNCH" 2>/dev/null || true
-}
-trap stop_launch EXIT
-for _ in $(seq 1 60); do
-  rostopic list >/dev/null 2>&1 && break
-  sleep 1
-done
+# shellcheck source=pipeline_launch.sh
+source "$ROOT/scripts/pipeline_launch.sh"
+start_pipeline "$OUT" lockstep:=0 fps:="$FPS" cve_port:="$PORT" "${EXTRA[@]}"
 set +e
 /usr/bin/python3 "$ROOT/scripts/fault_matrix.py" --pid "$LAUNCH" --out "$OUT" --room-port "$PORT" \
   --log "$OUT/launch.log" --baseline "$BASELINE" \
   ${ONLY:+--only "$ONLY"}
 rc=$?
 set -e
-stop_launch
-trap - EXIT
+stop_pipeline
 exit "$rc"

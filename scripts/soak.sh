@@ -59,23 +59,9 @@ PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1
 
 echo "[soak] $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; $MINUTES min on ROS master" \
   "$ROS_MASTER_URI, $([ "$LOCKSTEP" = 0 ] && echo 'camera rate (25 fps)' || echo lockstep); output in $OUT"
-# The launch in its own process group, so that everything it started can be stopped at once.
-setsid roslaunch -p "$ROS_PORT" "$ROOT/launch/demo.launch" frames:=0 lockstep:="$LOCKSTEP" \
-  cve_port:="$PORT" "${EXTRA[@]}" >"$OUT/launch.log" 2>&1 &
-LAUNCH=$!
-stop_launch() {
-  # roslaunch first, which stops its nodes in order (a node signalled on its own before that
-  # would be reported as "process has died"); the whole group only if it hangs.
-  kill -INT "$LAUNCH" 2>/dev/null || true
-  for _ in $(seq 1 30); do kill -0 "$LAUNCH" 2>/dev/null || return 0; sleep 1; done
-  kill -KILL -- "-$LAUNCH" 2>/dev/null || true
-}
-trap stop_launch EXIT
-# The master must be up before the monitor's node starts.
-for _ in $(seq 1 60); do
-  rostopic list >/dev/null 2>&1 && break
-  sleep 1
-done
+# shellcheck source=pipeline_launch.sh
+source "$ROOT/scripts/pipeline_launch.sh"
+start_pipeline "$OUT" lockstep:="$LOCKSTEP" cve_port:="$PORT" "${EXTRA[@]}"
 QUEUE=$(sed -n 's/^ *queue_size: *\([0-9]*\).*/\1/p' "$ROOT/src/psfs_reconstruction/config/psfs.yaml" | head -n 1)
 set +e
 /usr/bin/python3 "$ROOT/scripts/soak_monitor.py" --pid "$LAUNCH" --minutes "$MINUTES" \
@@ -83,8 +69,7 @@ set +e
   --max-growth "$GROWTH"
 rc=$?
 set -e
-stop_launch
-trap - EXIT
+stop_pipeline
 if grep -q -E 'process has died|Segmentation fault|terminate called' "$OUT/launch.log"; then
   echo "[soak] FAIL: a process died (see $OUT/launch.log):"
   grep -E 'process has died|Segmentation fault|terminate called' "$OUT/launch.log" | head -n 5

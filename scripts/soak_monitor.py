@@ -23,59 +23,10 @@ import time
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from proc_tree import label_of, processes_of, rss_mb  # noqa: E402
+
 LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
-
-
-def children_of(root):
-    """PIDs of root and all its descendants (from /proc/<pid>/stat)."""
-    parent = {}
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            with open(f"/proc/{entry}/stat") as f:
-                stat = f.read()
-            ppid = int(stat[stat.rindex(")") + 2:].split()[1])
-            parent[int(entry)] = ppid
-        except (OSError, ValueError):
-            continue
-    out, frontier = {root}, [root]
-    while frontier:
-        p = frontier.pop()
-        for c, pp in parent.items():
-            if pp == p and c not in out:
-                out.add(c)
-                frontier.append(c)
-    return out
-
-
-def label_of(pid):
-    """A process's ROS name (__name:=) or its program name."""
-    try:
-        with open(f"/proc/{pid}/cmdline", "rb") as f:
-            args = [a.decode(errors="replace") for a in f.read().split(b"\0") if a]
-    except OSError:
-        return None
-    for a in args:
-        if a.startswith("__name:="):
-            return a[len("__name:="):]
-    if not args:
-        return None
-    prog = os.path.basename(args[0])
-    if prog.startswith("python") and len(args) > 1:
-        prog = os.path.basename(args[1])
-    return prog
-
-
-def rss_mb(pid):
-    try:
-        with open(f"/proc/{pid}/status") as f:
-            for line in f:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return 0.0
 
 
 class Counter:
@@ -210,7 +161,7 @@ def main():
             print("[soak] the launch has ended early", flush=True)
             break
         rss = {}
-        for pid in children_of(a.pid):
+        for pid in processes_of(a.pid):
             name = label_of(pid)
             if name:
                 rss[name] = rss.get(name, 0.0) + rss_mb(pid)

@@ -16,19 +16,15 @@ bash "$ROOT/scripts/fault_matrix.sh" --no-setup --fps 6 --baseline 3 --out "$WOR
   --only camera_stops,size_switch,room_server_restart,nodelet_reload > "$LOG" 2>&1
 rc=$?
 cat "$LOG"
-body=""
+fail=""
 if [ "$rc" -ne 0 ]; then
   fail=$(grep -E 'recovered no|crash YES|never started' "$LOG" | head -n 3 | tr '\n' ' ')
   fail=${fail:-"fault_matrix.sh exited with $rc"}
-  details=$( (tail -n 40 "$LOG"; tail -n 40 "$WORK/launch.log" 2>/dev/null) |
-    sed 's/\x1b\[[0-9;]*m//g' | tr -d '\000-\010\013\014\016-\037' | sed 's/]]>/]] >/g')
-  body="<failure message=\"$(echo "$fail" | sed 's/&/\&amp;/g; s/</\&lt;/g; s/"/\&quot;/g')\"><![CDATA[$details]]></failure>"
 fi
-cat > "$RESULT" <<XML
-<?xml version="1.0" encoding="UTF-8"?>
-<testsuite name="fault_matrix" tests="1" failures="$([ -n "$body" ] && echo 1 || echo 0)" errors="0">
-  <testcase classname="fault_matrix" name="camera_stop_size_switch_room_server_restart_nodelet_reload_recover_without_crash">$body</testcase>
-</testsuite>
-XML
+# shellcheck source=script_junit.sh
+source "$HERE/script_junit.sh"
+script_junit "$RESULT" fault_matrix \
+  camera_stop_size_switch_room_server_restart_nodelet_reload_recover_without_crash "$fail" \
+  "$LOG" "$WORK/launch.log"
 [ "$rc" -eq 0 ] && rm -rf "$WORK"
 exit 0

@@ -16,20 +16,14 @@ bash "$ROOT/scripts/soak.sh" --no-setup --minutes 1 --warmup 30 --interval 3 --m
   > "$LOG" 2>&1
 rc=$?
 cat "$LOG"
-body=""
+fail=""
 if [ "$rc" -ne 0 ]; then
   fail=$(grep -E '^(\[soak\] )?FAIL' "$WORK/soak_summary.txt" 2>/dev/null | head -n 3 | tr '\n' ' ')
   fail=${fail:-"soak.sh exited with $rc"}
-  # The logs carry terminal colour codes: control characters are not allowed in XML.
-  details=$( (tail -n 40 "$LOG"; tail -n 40 "$WORK/launch.log" 2>/dev/null) |
-    sed 's/\x1b\[[0-9;]*m//g' | tr -d '\000-\010\013\014\016-\037' | sed 's/]]>/]] >/g')
-  body="<failure message=\"$(echo "$fail" | sed 's/&/\&amp;/g; s/</\&lt;/g; s/"/\&quot;/g')\"><![CDATA[$details]]></failure>"
 fi
-cat > "$RESULT" <<XML
-<?xml version="1.0" encoding="UTF-8"?>
-<testsuite name="soak" tests="1" failures="$([ -n "$body" ] && echo 1 || echo 0)" errors="0">
-  <testcase classname="soak" name="one_minute_of_the_whole_pipeline_without_crash_leak_or_error">$body</testcase>
-</testsuite>
-XML
+# shellcheck source=script_junit.sh
+source "$HERE/script_junit.sh"
+script_junit "$RESULT" soak one_minute_of_the_whole_pipeline_without_crash_leak_or_error "$fail" \
+  "$LOG" "$WORK/launch.log"
 [ "$rc" -eq 0 ] && rm -rf "$WORK"
 exit 0
