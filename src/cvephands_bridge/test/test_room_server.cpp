@@ -849,8 +849,9 @@ TEST(RoomServer, SenderRateAndBandwidthLimits) {
 }
 
 // Keep-alive: the server pings every idle_timeout / 2 and drops a peer that has sent nothing
-// (not even a pong) for idle_timeout; RoomClients answer and stay. A RoomClient that hears
-// nothing (a server gone without closing; here one that does not ping) gives up likewise.
+// (not even a pong) for idle_timeout; RoomClients answer and stay. A quiet RoomClient pings a
+// server that does not ping, and stays; one that hears nothing at all (a server gone without
+// closing; here a fake one that welcomes and then stays silent) gives up likewise.
 TEST(RoomServer, IdlePeersAreDropped) {
   RoomServerOptions o = loopback();
   o.idle_timeout = 0.4;

@@ -176,7 +176,6 @@ Admission ServerCore::registerConnection(Connection* c, std::weak_ptr<Connection
     r.order = next_order_++;
     r.websocket = websocket;
     r.address = address;
-    ++(websocket ? websockets_ : https_);
     // Every connection starts as plain HTTP (the WebSocket upgrade is an HTTP request), so both
     // kinds have limits for the waiting ones: HTTP connections (not upgraded) and WebSockets
     // not joined. A full address, or else a full pool, gives up its oldest waiting connection
@@ -215,14 +214,13 @@ void ServerCore::unpendLocked(Registered& r) {
   if (it != pending_by_address_[pool].end() && --it->second == 0) pending_by_address_[pool].erase(it);
 }
 
-void ServerCore::unregisterConnection(Connection* c, bool websocket) {
+void ServerCore::unregisterConnection(Connection* c) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = connections_.find(c);
   if (it == connections_.end()) return;
   unpendLocked(it->second);
   if (it->second.joined) --joined_;
   connections_.erase(it);
-  --(websocket ? websockets_ : https_);
 }
 
 bool ServerCore::tokenOk(const std::string& given) const {

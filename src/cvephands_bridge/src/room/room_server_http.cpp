@@ -44,14 +44,12 @@ class HttpSession : public Connection, public std::enable_shared_from_this<HttpS
 };
 
 HttpSession::~HttpSession() {
-  if (registered_) server_.unregisterConnection(this, false);
+  if (registered_) server_.unregisterConnection(this);
 }
 
 void HttpSession::run() {
-  beast::error_code ec;
-  const auto remote = stream_.socket().remote_endpoint(ec);
-  const std::string address = ec ? std::string("?") : remote.address().to_string();
-  if (server_.registerConnection(this, weak_from_this(), false, address) != Admission::kOk) {
+  if (server_.registerConnection(this, weak_from_this(), false, remoteAddress(stream_.socket())) !=
+      Admission::kOk) {
     beast::error_code ignored;
     stream_.socket().close(ignored);
     return;

@@ -49,11 +49,19 @@ class Connection {
  public:
   virtual ~Connection() = default;
   virtual void shutdown() = 0;  // any thread
-  // Closed to make room for a newer connection (a WebSocket that has not joined; any thread).
+  // Closed to make room for a newer connection while it waits (HTTP not upgraded, WebSocket
+  // not joined; any thread).
   virtual void evict() {}
 };
 
-enum class Admission { kOk, kFull, kStopping };
+enum class Admission { kOk, kStopping };
+
+// The peer's IP address as text ("?" if the socket no longer knows it): the per-address limit.
+inline std::string remoteAddress(const tcp::socket& socket) {
+  beast::error_code ec;
+  const auto remote = socket.remote_endpoint(ec);
+  return ec ? std::string("?") : remote.address().to_string();
+}
 
 // Per-sender token buckets (RoomServerOptions::max_sender_*), on the sender's strand.
 class SenderRateLimit {
@@ -112,7 +120,9 @@ class WsSession : public Connection, public std::enable_shared_from_this<WsSessi
     websocket::close_reason close_reason;
   };
 
-  void onAccept(beast::error_code ec, Admission admission);
+  void onAccept(beast::error_code ec);
+  // Takes a message of `bytes` from the sender's rate; false (counted as a drop) if over it.
+  bool withinRate(size_t bytes);
   void doRead();
   void onRead(beast::error_code ec);
   void handleText(std::string_view text);
@@ -160,8 +170,8 @@ class ServerCore {
   // A connection registers as waiting (HTTP: not upgraded; WebSocket: not joined) from
   // `address`; in a full pool or address the oldest waiting one of its kind is evicted.
   Admission registerConnection(Connection* c, std::weak_ptr<Connection> weak, bool websocket,
-                               const std::string& address = std::string());
-  void unregisterConnection(Connection* c, bool websocket);
+                               const std::string& address);
+  void unregisterConnection(Connection* c);
   bool originAllowed(const http::request<http::string_body>& req) const;
   bool tokenOk(const std::string& given) const;
   // Seats the session and sends the new participants list to the others; the session queues
@@ -208,7 +218,7 @@ class ServerCore {
     uint64_t order = 0;    // admission order: the oldest pending is evicted first
   };
   std::unordered_map<Connection*, Registered> connections_;
-  size_t websockets_ = 0, https_ = 0, joined_ = 0;
+  size_t joined_ = 0;
   size_t pending_[2] = {0, 0};  // waiting connections: [0] HTTP (not upgraded), [1] WebSocket (not joined)
   std::map<std::string, size_t> pending_by_address_[2];
   uint64_t next_order_ = 0;

@@ -40,16 +40,13 @@ WsSession::WsSession(ServerCore& server, beast::tcp_stream&& stream)
       rate_(server.options().max_sender_messages_per_s, server.options().max_sender_bytes_per_s) {}
 
 WsSession::~WsSession() {
-  if (registered_) server_.unregisterConnection(this, true);
+  if (registered_) server_.unregisterConnection(this);
 }
 
 void WsSession::run(http::request<http::string_body> upgrade) {
   upgrade_ = std::move(upgrade);
-  beast::error_code ec;
-  const auto remote = beast::get_lowest_layer(ws_).socket().remote_endpoint(ec);
-  const std::string address = ec ? std::string("?") : remote.address().to_string();
-  const Admission admission = server_.registerConnection(this, weak_from_this(), true, address);
-  if (admission == Admission::kStopping) {
+  if (server_.registerConnection(this, weak_from_this(), true,
+                                 remoteAddress(beast::get_lowest_layer(ws_).socket())) == Admission::kStopping) {
     beast::get_lowest_layer(ws_).close();
     return;
   }
@@ -65,16 +62,13 @@ void WsSession::run(http::request<http::string_body> upgrade) {
       [](websocket::response_type& res) { res.set(http::field::server, "cvephands-room"); }));
   ws_.read_message_max(0);   // enforced in onRead, so the client gets an error message first
   ws_.auto_fragment(false);  // one frame per message
-  ws_.async_accept(upgrade_, [self = shared_from_this(), admission](beast::error_code ec) {
-    self->onAccept(ec, admission);
-  });
+  ws_.async_accept(upgrade_, [self = shared_from_this()](beast::error_code ec) { self->onAccept(ec); });
 }
 
-void WsSession::onAccept(beast::error_code ec, Admission admission) {
+void WsSession::onAccept(beast::error_code ec) {
   if (ec) return end();
   accepted_ = true;
   if (evicted_) return kick("evicted", kEvictedDetail, kCloseGrace, /*count=*/false);
-  if (admission != Admission::kOk) return kick("server_full", "the server has its maximum number of clients");
   timer_.expires_after(toDuration(server_.options().join_timeout));
   timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
     if (!ec && !self->joined_ && !self->closing_)
@@ -113,11 +107,7 @@ void WsSession::onRead(beast::error_code ec) {
 void WsSession::handleText(std::string_view text) {
   // Control messages count against the sender's message rate too (a ping flood would keep
   // the server encoding pongs); over it, they are dropped like hand messages.
-  if (joined_ && !rate_.admit(text.size(), Clock::now())) {
-    ++rate_dropped;
-    ++server_.rate_dropped;
-    return;
-  }
+  if (joined_ && !withinRate(text.size())) return;
   const room::ClientMessage m = room::parseClientMessage(text);
   switch (m.type) {
     case room::ClientMessage::Type::kInvalid:
@@ -148,12 +138,15 @@ void WsSession::handleText(std::string_view text) {
 void WsSession::handleBinary() {
   if (!joined_) return kick("not_joined", "binary message before join");
   if (role == room::Role::kViewer) return kick("viewer_cannot_send", "viewers only watch");
-  if (!rate_.admit(in_.size(), Clock::now())) {
-    ++rate_dropped;
-    ++server_.rate_dropped;
-    return;
-  }
+  if (!withinRate(in_.size())) return;
   server_.relay(*this, in_);
+}
+
+bool WsSession::withinRate(size_t bytes) {
+  if (rate_.admit(bytes, Clock::now())) return true;
+  ++rate_dropped;
+  ++server_.rate_dropped;
+  return false;
 }
 
 void WsSession::deliver(Bytes message, bool binary) {
