@@ -614,9 +614,7 @@ PsfsRowFn selectPsfsRow(int k, bool vector) {
   const int64_t forced = g_forced_row_target.load(std::memory_order_relaxed);
   if (forced == -1) return referenceRow(k);
   if (forced != 0) return hwyRowKernel(forced, k);
-  int64_t allowed = hwyPortableTargets();
-  if (vector) allowed = avx512KernelsActive() ? ~int64_t(0) : hwyNoAvx512Targets();
-  return hwyRowKernel(hwyBestTarget(allowed), k);
+  return hwyRowKernel(hwyRowTarget(vector, avx512KernelsActive()), k);
 }
 
 PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector) {
@@ -663,4 +661,3 @@ int observeByte(const KernelView& view, const uint8_t* likelihood, uint32_t cent
 
 }  // namespace detail
 }  // namespace psfs
-

@@ -51,9 +51,9 @@ PsfsRowFn selectPsfsRow(int k, bool vector);
 std::vector<int64_t> hwyRowTargets();             // compiled and supported by this CPU
 PsfsRowFn hwyRowKernel(int64_t target, int k);    // target from hwyRowTargets()
 const char* hwyTargetName(int64_t target);
-int64_t hwyBestTarget(int64_t allowed);           // best usable in `allowed`, else the fallback
-int64_t hwyPortableTargets();                     // EMU128 | SCALAR (whichever is built)
-int64_t hwyNoAvx512Targets();                     // every target but the AVX-512 ones
+// The best compiled target this CPU supports: any (avx512), any but the AVX-512 ones, or only
+// the portable one (EMU128 or SCALAR, whichever is built) when !vector.
+int64_t hwyRowTarget(bool vector, bool avx512);
 // Tests: selectPsfsRow returns this target's kernel from now on (0: back to normal; -1: the
 // plain C++ reference the Highway kernels must equal byte for byte).
 void forceRowKernelForTest(int64_t target);

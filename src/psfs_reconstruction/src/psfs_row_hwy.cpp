@@ -125,9 +125,6 @@ PsfsRowFn RowKernel(int k) {
   }
 }
 
-// The target's name, for reports and tests.
-const char* RowKernelTarget() { return hwy::TargetName(HWY_TARGET); }
-
 }  // namespace HWY_NAMESPACE
 }  // namespace detail
 }  // namespace psfs
@@ -138,7 +135,6 @@ namespace psfs {
 namespace detail {
 
 HWY_EXPORT(RowKernel);
-HWY_EXPORT(RowKernelTarget);
 
 namespace {
 // Index into Highway's dispatch tables of one target (what ChosenTarget::GetIndex() computes
@@ -149,31 +145,22 @@ size_t tableIndexOf(int64_t target) {
 }
 }  // namespace
 
-std::vector<int64_t> hwyRowTargets() {
-  std::vector<int64_t> out;
-  for (int64_t t : hwy::SupportedAndGeneratedTargets()) out.push_back(t);
-  return out;
-}
+std::vector<int64_t> hwyRowTargets() { return hwy::SupportedAndGeneratedTargets(); }
 
 PsfsRowFn hwyRowKernel(int64_t target, int k) { return HWY_DISPATCH_TABLE(RowKernel)[tableIndexOf(target)](k); }
 
-const char* hwyTargetName(int64_t target) { return HWY_DISPATCH_TABLE(RowKernelTarget)[tableIndexOf(target)](); }
+const char* hwyTargetName(int64_t target) { return hwy::TargetName(target); }
 
-int64_t hwyBestTarget(int64_t allowed) {
-  const int64_t usable = hwy::SupportedTargets() & HWY_TARGETS & allowed;
-  const int64_t fallback = HWY_TARGETS & (HWY_EMU128 | HWY_SCALAR);
-  if (usable == 0) return fallback & -fallback;
-  return usable & -usable;  // Highway numbers better targets with lower bits
-}
-
-int64_t hwyPortableTargets() { return HWY_EMU128 | HWY_SCALAR; }
-
-int64_t hwyNoAvx512Targets() {
-  int64_t avx512 = HWY_AVX3 | HWY_AVX3_DL;
+int64_t hwyRowTarget(bool vector, bool avx512) {
+  const int64_t portable = HWY_EMU128 | HWY_SCALAR;
+  int64_t no_avx512 = HWY_AVX3 | HWY_AVX3_DL;
 #ifdef HWY_AVX3_ZEN4
-  avx512 |= HWY_AVX3_ZEN4;
+  no_avx512 |= HWY_AVX3_ZEN4;
 #endif
-  return ~avx512;
+  const int64_t allowed = !vector ? portable : avx512 ? ~int64_t(0) : ~no_avx512;
+  const int64_t usable = hwy::SupportedTargets() & HWY_TARGETS & allowed;
+  const int64_t fallback = HWY_TARGETS & portable;
+  return usable != 0 ? usable & -usable : fallback & -fallback;  // lower bit: better target
 }
 
 }  // namespace detail
