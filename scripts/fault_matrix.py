@@ -160,33 +160,43 @@ def main():
         load(name=a.ns + "/" + name, type=kind, remap_source_args=[], remap_target_args=[],
              my_argv=[], bond_id="")
 
-    # name, expected behaviour, action, timed (recovery counted from the end) or ridden through
+    # A fault: its name, the expected behaviour, how to make it, when it ends and what recovery
+    # means. ends: "timed" (d after the injection), "returns" (when its action returns) or "ride"
+    # (never: the pipeline should ride it through; judged from the injection). recovered:
+    # "pipeline" (pSfS rate and tracked targets back) or "rejoin" (the bridge back in the room).
+    # undo: what puts the rig back afterwards.
+    class Fault:
+        def __init__(self, name, expected, action, ends, recovered="pipeline", undo=None):
+            self.name, self.expected, self.action = name, expected, action
+            self.ends, self.recovered, self.undo = ends, recovered, undo
+
     faults = [
-        ("camera_stops", f"camera {c} silent for {d:g} s: sets go on without it (synchroniser "
-                         "timeout), then with it again",
-         lambda: rig(f"stop {c} {d}"), True),
-        ("encoding_switch", f"camera {c} sends bgr8 for {d:g} s: its images are rejected with a "
-                            "throttled error, the others go on",
-         lambda: rig(f"encoding {c} bgr8 {d}"), True),
-        ("size_switch", f"camera {c} sends 160x120 for {d:g} s: refused as a size mismatch",
-         lambda: rig(f"size {c} 160 120 {d}"), True),
-        ("camera_info_nan", f"camera {c}'s camera_info has NaN intrinsics for {d:g} s: that "
-                            "camera is left out or its info ignored",
-         lambda: rig(f"nan_info {c} {d}"), True),
-        ("light_on", "every camera 40 % brighter from now on: the classifier's gain compensation "
-                     "rides it through",
-         lambda: rig("brightness 1.4 0"), False),
-        ("room_server_restart", f"the room server killed and restarted {d:g} s later: the bridge "
-                                "rejoins (back-off), the pipeline never waits; recovery = rejoin "
-                                "after the restart",
-         restart_room_server, False),
-        ("nodelet_reload", f"the MPF tracker nodelet unloaded and loaded again {d:g} s later: "
-                           "pSfS goes on, tracking starts over",
-         lambda: reload_nodelet("mpf", "hand_tracking/Mpf"), True),
+        Fault("camera_stops", f"camera {c} silent for {d:g} s: sets go on without it (synchroniser "
+                              "timeout), then with it again",
+              lambda: rig(f"stop {c} {d}"), "timed"),
+        Fault("encoding_switch", f"camera {c} sends bgr8 for {d:g} s: its images are rejected with a "
+                                 "throttled error, the others go on",
+              lambda: rig(f"encoding {c} bgr8 {d}"), "timed"),
+        Fault("size_switch", f"camera {c} sends 160x120 for {d:g} s: refused as a size mismatch",
+              lambda: rig(f"size {c} 160 120 {d}"), "timed"),
+        Fault("camera_info_nan", f"camera {c}'s camera_info has NaN intrinsics for {d:g} s: that "
+                                 "camera is left out or its info ignored",
+              lambda: rig(f"nan_info {c} {d}"), "timed"),
+        Fault("light_on", "every camera 40 % brighter from now on: the classifier's gain compensation "
+                          "rides it through",
+              lambda: rig("brightness 1.4 0"), "ride", undo=lambda: rig("clear")),
+        Fault("room_server_restart", f"the room server killed and restarted {d:g} s later: the bridge "
+                                     "rejoins (back-off), the pipeline never waits; recovery = rejoin "
+                                     "after the restart",
+              restart_room_server, "returns", recovered="rejoin"),
+        Fault("nodelet_reload", f"the MPF tracker nodelet unloaded and loaded again {d:g} s later: "
+                                "pSfS goes on, tracking starts over",
+              lambda: reload_nodelet("mpf", "hand_tracking/Mpf"), "returns"),
     ]
     only = {x for x in a.only.split(",") if x}
     rows, ok = [], True
-    for name, expected, action, timed in faults:
+    for fault in faults:
+        name = fault.name
         if only and name not in only:
             continue
         manager = pid_of(a.pid, "manager")
@@ -199,37 +209,32 @@ def main():
         f0 = time.monotonic()
         print(f"[fault_matrix] {name}: baseline {base_rate:.1f} sets/s, {base_targets} targets; injecting",
               flush=True)
-        action()
-        # Timed faults end d after the injection (the reload: once its load returned); the
-        # ridden-through ones are judged from the injection.
-        f1 = time.monotonic() if not timed or name == "nodelet_reload" else f0 + d
-        if timed and name != "nodelet_reload":
-            time.sleep(max(0.0, f1 - time.monotonic()))
-        ref = f1 if timed else f0
+        fault.action()
+        if fault.ends == "timed":
+            time.sleep(max(0.0, f0 + d - time.monotonic()))
+        ref = f0 if fault.ends == "ride" else time.monotonic()  # recovery is counted from here
         recovered = None
         while time.monotonic() - ref < a.max_recovery:
             time.sleep(0.25)
             now = time.monotonic()
+            if fault.recovered == "rejoin":
+                with watch.lock:
+                    back = [t for t in watch.joins if t > f0]
+                if back:
+                    recovered = max(0.0, back[0] - ref)
+                    break
+                continue
             if now - ref < 1.0:
                 continue
             if watch.rate(now - 1.0, now) >= 0.8 * base_rate and (watch.targets(now - 1.0, now) or 0) >= base_targets:
                 first = watch.first_set_after(ref)
                 recovered = max(0.0, (first if first is not None else now) - ref)
                 break
-        if name == "room_server_restart":  # recovered = the bridge in the room again
-            recovered = None
-            while time.monotonic() - f0 < a.max_recovery + d:
-                with watch.lock:
-                    back = [t for t in watch.joins if t > f0]
-                if back:
-                    recovered = back[0] - f1
-                    break
-                time.sleep(0.25)
         end = time.monotonic()
         lost = max(0, int(round(base_rate * (end - f0))) - watch.count(f0, end))
         message = watch.first_log(f0, end)
-        if name == "light_on":
-            rig("clear")
+        if fault.undo:
+            fault.undo()
         time.sleep(1.0)
         # A crash: the nodelet manager gone, or a process that died abnormally. (The reload's
         # loader process ends with its nodelet's bond: expected. The room server is stopped on
@@ -241,7 +246,7 @@ def main():
         crash = (manager is not None and not os.path.exists(f"/proc/{manager}")) or bool(died)
         if crash or recovered is None:
             ok = False
-        rows.append((name, expected, recovered, lost, message, crash))
+        rows.append((name, fault.expected, recovered, lost, message, crash))
         print(f"[fault_matrix] {name}: recovered {'no' if recovered is None else f'{recovered:.1f} s'}, "
               f"{lost} sets lost, crash {'YES' if crash else 'no'}; message: {message or '(none)'}", flush=True)
     if room_proc["p"] is not None:

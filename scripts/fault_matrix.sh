@@ -38,16 +38,11 @@ while [ $# -gt 0 ]; do
     *) echo "fault_matrix: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
 done
-mkdir -p "$OUT"
-OUT="$(cd "$OUT" && pwd)"
-[ "$SETUP" = true ] && bash "$ROOT/scripts/setup.sh"
-# shellcheck source=ros_env.sh
-source "$ROOT/scripts/ros_env.sh"
-export ROS_LOG_DIR="$OUT/ros_log" ROSCONSOLE_STDOUT_LINE_BUFFERED=1 TABLETOP_ROOT="$ROOT"
-PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-echo "[fault_matrix] $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; rig at $FPS fps; output in $OUT"
 # shellcheck source=pipeline_launch.sh
 source "$ROOT/scripts/pipeline_launch.sh"
+prepare_run
+export TABLETOP_ROOT="$ROOT"
+echo "[fault_matrix] $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; rig at $FPS fps; output in $OUT"
 start_pipeline "$OUT" lockstep:=0 fps:="$FPS" cve_port:="$PORT" "${EXTRA[@]}"
 set +e
 /usr/bin/python3 "$ROOT/scripts/fault_matrix.py" --pid "$LAUNCH" --out "$OUT" --room-port "$PORT" \

@@ -1,10 +1,24 @@
-# Sourced by soak.sh and fault_matrix.sh: starts launch/demo.launch in the background in its own
-# process group (log in $1/launch.log), waits for its ROS master, and stops it again.
+# Sourced by soak.sh and fault_matrix.sh: prepares a run, starts launch/demo.launch in the
+# background in its own process group (log in $1/launch.log), waits for its ROS master, and
+# stops it again.
+#   prepare_run               OUT made absolute and created; setup.sh unless SETUP=false; the
+#                             ROS environment (ros_env.sh), logs into $OUT/ros_log; PORT: a
+#                             free port for the room server
 #   start_pipeline OUT_DIR roslaunch_args...   sets LAUNCH (roslaunch's PID) and a trap
 #   stop_pipeline                              roslaunch first (it stops its nodes in order; a
 #                                              node signalled on its own would be reported as
 #                                              "process has died"), the whole group if it hangs
 # Needs ROS_PORT (ros_env.sh).
+prepare_run() {
+  mkdir -p "$OUT"
+  OUT="$(cd "$OUT" && pwd)"
+  [ "$SETUP" = false ] || bash "$ROOT/scripts/setup.sh"
+  # shellcheck source=ros_env.sh
+  source "$ROOT/scripts/ros_env.sh"
+  export ROS_LOG_DIR="$OUT/ros_log" ROSCONSOLE_STDOUT_LINE_BUFFERED=1
+  PORT=$(free_port)
+}
+
 start_pipeline() {
   local out="$1"
   shift

@@ -48,19 +48,12 @@ while [ $# -gt 0 ]; do
     *) echo "soak: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
 done
-mkdir -p "$OUT"
-OUT="$(cd "$OUT" && pwd)"
-[ "$SETUP" = true ] && bash "$ROOT/scripts/setup.sh"
-# shellcheck source=ros_env.sh
-source "$ROOT/scripts/ros_env.sh"
-export ROS_LOG_DIR="$OUT/ros_log"
-export ROSCONSOLE_STDOUT_LINE_BUFFERED=1
-PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+# shellcheck source=pipeline_launch.sh
+source "$ROOT/scripts/pipeline_launch.sh"
+prepare_run
 
 echo "[soak] $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; $MINUTES min on ROS master" \
   "$ROS_MASTER_URI, $([ "$LOCKSTEP" = 0 ] && echo 'camera rate (25 fps)' || echo lockstep); output in $OUT"
-# shellcheck source=pipeline_launch.sh
-source "$ROOT/scripts/pipeline_launch.sh"
 start_pipeline "$OUT" lockstep:="$LOCKSTEP" cve_port:="$PORT" "${EXTRA[@]}"
 QUEUE=$(sed -n 's/^ *queue_size: *\([0-9]*\).*/\1/p' "$ROOT/src/psfs_reconstruction/config/psfs.yaml" | head -n 1)
 set +e
