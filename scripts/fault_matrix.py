@@ -5,16 +5,20 @@ Run by scripts/fault_matrix.sh with Debian's /usr/bin/python3 (rospy) against la
 at the camera rate. For each fault, in turn: a baseline of --baseline seconds, the fault, then
 up to --max-recovery seconds for the pipeline to come back. Measured per fault:
   - recovery (s): from the end of the fault (or its start, for faults that the pipeline should
-    ride through) to the first set pSfS finishes, once a 1 s window shows pSfS at >= 80 % of its
+    ride through) to the first set pSfS reconstructs (not one it learns into the background), once a 1 s window shows pSfS at >= 80 % of its
     baseline rate AND the tracker with the active targets it had before (for the room server:
     from its restart until the bridge has rejoined);
   - sets lost: frame sets the cameras produced in that span (baseline rate x span) that pSfS
-    did not finish;
+    did not reconstruct;
   - message: the first WARN/ERROR on /rosout from a pipeline node during the fault, naming the
     cause (the rig's own "injecting fault" line excluded);
   - crash: the nodelet manager gone, or a process of the launch that died abnormally.
-Writes fault_matrix.md (a table) and fault_matrix.csv into --out; exits 1 if any fault crashed
-something or did not recover within --max-recovery.
+Each fault also carries its own assertions: the cause it must report (a WARN/ERROR on /rosout
+containing a given text, at any time during the fault) and, for the faults the pipeline should
+carry on through, at most --max-lost sets lost (degraded output instead of none).
+Writes fault_matrix.md (a table), fault_matrix.csv and, with --junit, a JUnit file with one test
+case per fault; exits 1 if any fault crashed something, did not recover within --max-recovery
+or failed its assertions.
 """
 import argparse
 import os
@@ -22,11 +26,13 @@ import subprocess
 import sys
 import threading
 import time
+from xml.sax.saxutils import escape, quoteattr
 
 import rospy
 from rosgraph_msgs.msg import Log
 from std_msgs.msg import Header, String
 from nodelet.srv import NodeletLoad, NodeletUnload
+from std_srvs.srv import Trigger
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from proc_tree import pid_of  # noqa: E402
@@ -38,7 +44,7 @@ except ImportError:  # the devel space not sourced
 
 
 class Watch:
-    """Counts pSfS's finished sets, the tracker's active targets, and collects /rosout WARN+."""
+    """Counts pSfS's reconstructed sets, the tracker's active targets, and collects /rosout WARN+."""
 
     def __init__(self, ns):
         self.lock = threading.Lock()
@@ -51,7 +57,10 @@ class Watch:
             rospy.Subscriber(ns + "/hands/targets", TrackedTargets, self.on_targets, queue_size=100)
         rospy.Subscriber("/rosout_agg", Log, self.on_log, queue_size=1000)
 
-    def on_processed(self, _):
+    def on_processed(self, m):
+        # Only sets made into volumes: a set learned into the background is no output.
+        if m.frame_id != "reconstructed":
+            return
         with self.lock:
             self.processed.append(time.monotonic())
 
@@ -86,6 +95,10 @@ class Watch:
             after = [t for t in self.processed if t >= t0]
         return after[0] if after else None
 
+    def any_log(self, t0, t1, text):
+        with self.lock:
+            return any(text in msg for t, _, _, msg in self.logs if t0 <= t < t1)
+
     def first_log(self, t0, t1):
         with self.lock:
             for t, name, level, text in self.logs:
@@ -115,6 +128,9 @@ def main():
     ap.add_argument("--room-port", type=int, default=0, help="the room server's port (restart fault)")
     ap.add_argument("--only", default="", help="comma-separated fault names to run")
     ap.add_argument("--log", default="", help="the launch's log file (crash lines)")
+    ap.add_argument("--max-lost", type=int, default=3,
+                    help="sets a fault that the pipeline should carry on through may cost at most")
+    ap.add_argument("--junit", default="", help="write a JUnit file with one case per fault")
     a = ap.parse_args(rospy.myargv()[1:])
     os.makedirs(a.out, exist_ok=True)
     rospy.init_node("fault_matrix", anonymous=True, disable_signals=True)
@@ -160,35 +176,66 @@ def main():
         load(name=a.ns + "/" + name, type=kind, remap_source_args=[], remap_target_args=[],
              my_argv=[], bond_id="")
 
+    def relearn_background():
+        # The person is in view (the simulated rig's script keeps them there after its first
+        # empty sets): what happens when the background is learned now.
+        rospy.ServiceProxy(a.ns + "/psfs/relearn_background", Trigger)()
+
     # A fault: its name, the expected behaviour, how to make it, when it ends and what recovery
     # means. ends: "timed" (d after the injection), "returns" (when its action returns) or "ride"
     # (never: the pipeline should ride it through; judged from the injection). recovered:
     # "pipeline" (pSfS rate and tracked targets back) or "rejoin" (the bridge back in the room).
-    # undo: what puts the rig back afterwards.
+    # undo: what puts the rig back afterwards. reports: a text some WARN/ERROR during the fault
+    # must contain (the cause named). carries_on: the pipeline should go on through the fault
+    # with degraded output, so at most --max-lost sets may be lost.
     class Fault:
-        def __init__(self, name, expected, action, ends, recovered="pipeline", undo=None):
+        def __init__(self, name, expected, action, ends, recovered="pipeline", undo=None,
+                     reports="", carries_on=False):
             self.name, self.expected, self.action = name, expected, action
             self.ends, self.recovered, self.undo = ends, recovered, undo
+            self.reports, self.carries_on = reports, carries_on
 
     faults = [
-        Fault("camera_stops", f"camera {c} silent for {d:g} s: sets go on without it (synchroniser "
-                              "timeout), then with it again",
-              lambda: rig(f"stop {c} {d}"), "timed"),
+        Fault("camera_stops", f"camera {c} silent for {d:g} s: sets go on without it (degraded "
+                              "sets, its slot empty), then with it again",
+              lambda: rig(f"stop {c} {d}"), "timed", reports=f"published without cam{c}",
+              carries_on=True),
         Fault("encoding_switch", f"camera {c} sends bgr8 for {d:g} s: its images are rejected with a "
                                  "throttled error, the others go on",
-              lambda: rig(f"encoding {c} bgr8 {d}"), "timed"),
-        Fault("size_switch", f"camera {c} sends 160x120 for {d:g} s: refused as a size mismatch",
-              lambda: rig(f"size {c} 160 120 {d}"), "timed"),
+              lambda: rig(f"encoding {c} bgr8 {d}"), "timed", carries_on=True),
+        Fault("size_switch", f"camera {c} sends 160x120 for {d:g} s: refused as a size mismatch, "
+                             "the sets go on without it",
+              lambda: rig(f"size {c} 160 120 {d}"), "timed", reports="does not match camera_info",
+              carries_on=True),
         Fault("camera_info_nan", f"camera {c}'s camera_info has NaN intrinsics for {d:g} s: that "
                                  "camera is left out or its info ignored",
-              lambda: rig(f"nan_info {c} {d}"), "timed"),
+              lambda: rig(f"nan_info {c} {d}"), "timed", reports="invalid camera_info",
+              carries_on=True),
+        Fault("tf_missing", f"camera {c}'s images name an optical frame without tf for {d:g} s: "
+                            "reported, the sets go on without it",
+              lambda: rig(f"frame {c} cam{c}_unknown_optical_frame {d}"), "timed",
+              reports=f"cam{c}: no tf", carries_on=True),
+        Fault("tf_change", f"camera {c}'s tf re-broadcast 3 cm off for {d:g} s (the camera did not "
+                           "move): the new pose is adopted within 1 s and reported, the volumes "
+                           "degrade, nothing stops; the true tf again after",
+              lambda: rig(f"tf {c} 0.03 0 0 {d}"), "timed", reports=f"cam{c}: its tf changed",
+              carries_on=True),
+        Fault("clock_back", "every stamp 30 s earlier from now on (a bag played in a loop): the "
+                            "synchroniser starts over, the stages follow without waiting",
+              lambda: rig("clock -30 0"), "ride", undo=lambda: rig("clear"),
+              reports="time went back"),
+        Fault("person_at_learning", "the background relearned (relearn_background) while the person "
+                                    "is in view: each learning set is refused and reported (the "
+                                    "model used before sees a body), and after learning_frames of "
+                                    "them that model is taken back",
+              relearn_background, "returns", reports="learned before again"),
         Fault("light_on", "every camera 40 % brighter from now on: the classifier's gain compensation "
                           "rides it through",
-              lambda: rig("brightness 1.4 0"), "ride", undo=lambda: rig("clear")),
+              lambda: rig("brightness 1.4 0"), "ride", undo=lambda: rig("clear"), carries_on=True),
         Fault("room_server_restart", f"the room server killed and restarted {d:g} s later: the bridge "
                                      "rejoins (back-off), the pipeline never waits; recovery = rejoin "
                                      "after the restart",
-              restart_room_server, "returns", recovered="rejoin"),
+              restart_room_server, "returns", recovered="rejoin", reports="cannot join room"),
         Fault("nodelet_reload", f"the MPF tracker nodelet unloaded and loaded again {d:g} s later: "
                                 "pSfS goes on, tracking starts over",
               lambda: reload_nodelet("mpf", "hand_tracking/Mpf"), "returns"),
@@ -233,6 +280,13 @@ def main():
         end = time.monotonic()
         lost = max(0, int(round(base_rate * (end - f0))) - watch.count(f0, end))
         message = watch.first_log(f0, end)
+        problems = []
+        if recovered is None:
+            problems.append(f"no recovery within {a.max_recovery:g} s")
+        if fault.reports and not watch.any_log(f0, end, fault.reports):
+            problems.append(f"no WARN/ERROR containing '{fault.reports}'")
+        if fault.carries_on and lost > a.max_lost:
+            problems.append(f"{lost} sets lost (at most {a.max_lost})")
         if fault.undo:
             fault.undo()
         time.sleep(1.0)
@@ -244,23 +298,39 @@ def main():
                 if ("process has died" in l and "room_server" not in l and "/mpf-" not in l)
                 or "Segmentation fault" in l or "terminate called" in l]
         crash = (manager is not None and not os.path.exists(f"/proc/{manager}")) or bool(died)
-        if crash or recovered is None:
+        if crash:
+            problems.insert(0, "crash: " + ("; ".join(died[:2]) or "the nodelet manager is gone"))
+        if problems:
             ok = False
-        rows.append((name, fault.expected, recovered, lost, message, crash))
+        rows.append((name, fault.expected, recovered, lost, message, crash, problems))
         print(f"[fault_matrix] {name}: recovered {'no' if recovered is None else f'{recovered:.1f} s'}, "
-              f"{lost} sets lost, crash {'YES' if crash else 'no'}; message: {message or '(none)'}", flush=True)
+              f"{lost} sets lost, crash {'YES' if crash else 'no'}; message: {message or '(none)'}"
+              f"{'; FAILED: ' + '; '.join(problems) if problems else ''}", flush=True)
     if room_proc["p"] is not None:
         room_proc["p"].terminate()
     with open(os.path.join(a.out, "fault_matrix.csv"), "w") as f:
         f.write("fault,recovery_s,sets_lost,crash,message\n")
-        for name, _, rec, lost, msg, crash in rows:
+        for name, _, rec, lost, msg, crash, _ in rows:
             f.write(f"{name},{'' if rec is None else f'{rec:.2f}'},{lost},{int(crash)},\"{msg.replace(chr(34), chr(39))}\"\n")
     with open(os.path.join(a.out, "fault_matrix.md"), "w") as f:
         f.write("| fault | expected | recovery | sets lost | crash | first WARN/ERROR on /rosout |\n")
         f.write("|---|---|---:|---:|---|---|\n")
-        for name, exp, rec, lost, msg, crash in rows:
+        for name, exp, rec, lost, msg, crash, _ in rows:
             f.write(f"| {name} | {exp} | {'not within ' + str(a.max_recovery) + ' s' if rec is None else f'{rec:.1f} s'} "
                     f"| {lost} | {'YES' if crash else 'no'} | {msg.replace('|', '/')[:200] or '(none)'} |\n")
+    if a.junit:
+        with open(a.junit, "w") as f:
+            failures = sum(1 for r in rows if r[6])
+            f.write('<?xml version="1.0" encoding="UTF-8"?>\n')
+            f.write(f'<testsuite name="fault_matrix" tests="{len(rows)}" failures="{failures}" errors="0">\n')
+            for name, exp, rec, lost, msg, crash, problems in rows:
+                f.write(f'  <testcase classname="fault_matrix" name={quoteattr(name)}>')
+                if problems:
+                    detail = (f"expected: {exp}\nrecovery: {rec}\nsets lost: {lost}\n"
+                              f"first WARN/ERROR: {msg}")
+                    f.write(f'<failure message={quoteattr("; ".join(problems))}>{escape(detail)}</failure>')
+                f.write("</testcase>\n")
+            f.write("</testsuite>\n")
     print(f"[fault_matrix] {'PASS' if ok else 'FAIL'}: {os.path.join(a.out, 'fault_matrix.md')}", flush=True)
     rospy.signal_shutdown("done")
     return 0 if ok else 1

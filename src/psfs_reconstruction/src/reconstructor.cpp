@@ -1,5 +1,7 @@
 #include "psfs_reconstruction/reconstructor.h"
 
+#include <algorithm>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -49,6 +51,8 @@ void ReconstructorParams::validate() const {
   if (mask_margin_px < 0 || mask_margin_px > 50) fail("mask_margin_px must lie in [0, 50]");
   if (!(dark_camera_fraction > 0 && dark_camera_fraction <= 1))
     fail("dark_camera_fraction must lie in (0, 1]");
+  if (!(learning_max_occupied_litres >= 0 && std::isfinite(learning_max_occupied_litres)))
+    fail("learning_max_occupied_litres must be finite and >= 0");
   if (!(saturated_warning_fraction > 0 && saturated_warning_fraction <= 1))
     fail("saturated_warning_fraction must lie in (0, 1]");
   if (threads < 0) fail("threads must be >= 0");
@@ -96,6 +100,7 @@ bool Reconstructor::backgroundReady() const {
 }
 
 void Reconstructor::resetBackground() {
+  if (backgroundReady()) previous_backgrounds_ = backgrounds_;
   for (auto& b : backgrounds_) b = BackgroundModel(b.width(), b.height(), params_.background);
   learning_skips_ = 0;
 }
@@ -106,6 +111,8 @@ void Reconstructor::validateFrame(const std::vector<cv::Mat>& rgb,
   if (rgb.size() != cameras.size())
     throw std::invalid_argument("frame set has " + std::to_string(rgb.size()) + " images but " +
                                 std::to_string(cameras.size()) + " cameras");
+  if (std::all_of(rgb.begin(), rgb.end(), [](const cv::Mat& m) { return m.empty(); }))
+    throw std::invalid_argument("frame set has no image (every camera missing)");
   for (size_t i = 0; i < cameras.size(); ++i) {
     const auto& cam = cameras[i];
     const std::string name = cam.name.empty() ? "camera " + std::to_string(i) : cam.name;
@@ -118,7 +125,7 @@ void Reconstructor::validateFrame(const std::vector<cv::Mat>& rgb,
       throw std::invalid_argument(name + ": image is " + std::to_string(rgb[i].cols) + "x" +
                                   std::to_string(rgb[i].rows) + " but its calibration says " +
                                   std::to_string(cam.width) + "x" + std::to_string(cam.height));
-    checkRgb8(rgb[i], cam.width, cam.height, name);
+    if (!rgb[i].empty()) checkRgb8(rgb[i], cam.width, cam.height, name);
   }
 }
 
@@ -139,6 +146,7 @@ void Reconstructor::adoptRig(const std::vector<tabletop_capture::CameraModel>& c
                           "the next " + std::to_string(params_.background.learning_frames) +
                           " frame sets");
     backgrounds_.clear();
+    previous_backgrounds_.clear();
     for (const auto& c : cameras)
       backgrounds_.emplace_back(c.width, c.height, params_.background);
     // A model loaded from files is used if it was saved for exactly these cameras.
@@ -180,8 +188,20 @@ void Reconstructor::adoptRig(const std::vector<tabletop_capture::CameraModel>& c
 Reconstructor::LearningVerdict Reconstructor::checkLearningFrame(
     const std::vector<cv::Mat>& rgb, std::vector<std::string>* warnings) {
   const int learned = backgrounds_[0].learnedFrames();
-  if (learned < 1) return LearningVerdict::kLearn;
   const BackgroundModelParams& bp = params_.background;
+  // After a relearn or a time jump the models used before still know the empty workspace: a
+  // set in which they see a body is not empty, even if the person sits still (which the
+  // change test below cannot see) or is there from the first learning set on.
+  if (previous_backgrounds_.size() == backgrounds_.size()) {
+    const double litres = occupiedLitresAgainstPrevious(rgb);
+    if (litres > params_.learning_max_occupied_litres) {
+      char what[160];
+      std::snprintf(what, sizeof what, "the background model used before sees %.1f litres occupied "
+                    "in the workspace (a person in view?)", litres);
+      return skipLearningFrame(what, warnings);
+    }
+  }
+  if (learned < 1) return LearningVerdict::kLearn;
   double worst = 0;
   size_t worst_camera = 0;
   for (size_t i = 0; i < backgrounds_.size(); ++i) {
@@ -202,16 +222,116 @@ Reconstructor::LearningVerdict Reconstructor::checkLearningFrame(
     learning_skips_ = 0;
     return LearningVerdict::kEndLearning;
   }
-  warnings->push_back("frame set not learned into the background: " + what +
-                      " (a person in view?)");
-  if (++learning_skips_ >= bp.learning_frames) {
-    // The scene stays changed: the few frames learned first were the odd ones out.
-    warnings->push_back("the scene differed from the first " + std::to_string(learned) +
-                        " learned frame sets for " + std::to_string(learning_skips_) +
-                        " sets: learning the background again from scratch");
-    resetBackground();  // (and the count of skips)
+  return skipLearningFrame(what + " (a person in view?)", warnings);
+}
+
+// A learning set that shows something in the workspace. After learning_frames of them in a
+// row, the models used before are taken back if there are any (a relearn or a time jump with
+// the person in view); else learning starts over (the few sets learned first were the odd ones
+// out), until the workspace is empty.
+Reconstructor::LearningVerdict Reconstructor::skipLearningFrame(const std::string& why,
+                                                                std::vector<std::string>* warnings) {
+  warnings->push_back("frame set not learned into the background: " + why);
+  if (++learning_skips_ < params_.background.learning_frames) return LearningVerdict::kSkip;
+  if (previous_backgrounds_.size() == backgrounds_.size()) {
+    warnings->push_back("the workspace was not empty for " + std::to_string(learning_skips_) +
+                        " frame sets (a person in view): using the background model learned "
+                        "before again; relearn with an empty workspace for a fresh one");
+    backgrounds_ = previous_backgrounds_;
+    learning_skips_ = 0;
+    return LearningVerdict::kEndLearning;
   }
+  warnings->push_back("the scene differed from the first " +
+                      std::to_string(backgrounds_[0].learnedFrames()) + " learned frame sets for " +
+                      std::to_string(learning_skips_) +
+                      " sets: learning the background again from scratch (it needs an empty "
+                      "workspace)");
+  resetBackground();  // (and the count of skips)
   return LearningVerdict::kSkip;
+}
+
+// Classification, view evidence and the two workspace volumes of one set against `backgrounds`
+// (the cameras missing from the set and the dark ones switched off). Fills r's stats,
+// camera_active, body, skin, their times and warnings.
+void Reconstructor::fuseWorkspace(const std::vector<cv::Mat>& rgb,
+                                  const std::vector<BackgroundModel>& backgrounds, FrameResult* r) {
+  const int n = static_cast<int>(cameras_.size());
+  std::vector<int> seen;
+  for (int i = 0; i < n; ++i)
+    if (!rgb[i].empty()) seen.push_back(i);
+  // --- classification
+  auto t0 = Clock::now();
+  {
+    std::vector<cv::Mat> seen_rgb, seen_likelihoods;
+    std::vector<const BackgroundModel*> bg;
+    for (int i : seen) {
+      // Headers that share likelihoods_[i]'s buffer: classify() writes into it.
+      likelihoods_[i].create(rgb[i].rows, rgb[i].cols, CV_8UC2);
+      seen_rgb.push_back(rgb[i]);
+      seen_likelihoods.push_back(likelihoods_[i]);
+      bg.push_back(&backgrounds[i]);
+    }
+    const std::vector<ClassificationStats> stats =
+        classifier_.classify(seen_rgb, bg, seen_likelihoods, params_.threads);
+    r->stats.assign(n, ClassificationStats());
+    for (size_t k = 0; k < seen.size(); ++k) r->stats[seen[k]] = stats[k];
+  }
+  r->times.classify = msSince(t0);
+
+  // --- evidence (dark cameras switched off)
+  t0 = Clock::now();
+  r->camera_active.assign(n, true);
+  std::vector<ViewImage> body_views(n), skin_views(n);
+  for (int i = 0; i < n; ++i) {
+    const auto& s = r->stats[i];
+    if (rgb[i].empty()) {  // missing from this set: no evidence either way
+      r->camera_active[i] = false;
+      likelihoods_[i].create(cameras_[i].height, cameras_[i].width, CV_8UC2);
+      likelihoods_[i].setTo(0);
+    } else if (s.darkFraction() > params_.dark_camera_fraction) {
+      r->camera_active[i] = false;
+      r->warnings.push_back(cameras_[i].name + ": " + percent(s.darkFraction()) +
+                            " of the image is too dark for colour (covered lens or camera off?): "
+                            "the view is left out of this frame");
+    } else if (s.saturatedFraction() > params_.saturated_warning_fraction) {
+      r->warnings.push_back(cameras_[i].name + ": " + percent(s.saturatedFraction()) +
+                            " of the pixels are saturated (overexposed): colours are unreliable");
+    }
+    body_views[i].likelihood = likelihoods_[i];
+    body_views[i].channel = 0;
+    skin_views[i].likelihood = likelihoods_[i];
+    skin_views[i].channel = 1;
+    if (!r->camera_active[i]) {
+      const cv::Mat off = cv::Mat::zeros(likelihoods_[i].size(), CV_8UC1);
+      body_views[i].active = off;
+      skin_views[i].active = off;
+    }
+  }
+  body_evidence_.set(body_views, params_.body.multi_projection, params_.threads,
+                     params_.body.footprint ? params_.body_footprint : FootprintFilter());
+  skin_evidence_.set(skin_views, params_.skin.multi_projection, params_.threads,
+                     params_.skin.footprint ? params_.skin_footprint : FootprintFilter());
+  r->times.evidence = msSince(t0);
+
+  // --- workspace volumes
+  t0 = Clock::now();
+  body_fusion_.fuse(*table_, body_evidence_, &r->body);
+  r->times.body = msSince(t0);
+  t0 = Clock::now();
+  skin_fusion_.fuse(*table_, skin_evidence_, &r->skin);
+  r->times.skin = msSince(t0);
+}
+
+// The body volume (litres at the body threshold) that the previous models see in a learning
+// set: an empty workspace shows next to none, a person several litres.
+double Reconstructor::occupiedLitresAgainstPrevious(const std::vector<cv::Mat>& rgb) {
+  FrameResult probe;
+  fuseWorkspace(rgb, previous_backgrounds_, &probe);
+  const uint8_t t = thresholdByte(params_.body.threshold);
+  const size_t occupied = static_cast<size_t>(
+      std::count_if(probe.body.data.begin(), probe.body.data.end(), [t](uint8_t v) { return v > t; }));
+  const double edge = probe.body.grid.voxel_size;
+  return occupied * edge * edge * edge * 1e3;
 }
 
 FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
@@ -227,9 +347,17 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
   adoptRig(cameras, &r.warnings);
   const int n = static_cast<int>(cameras_.size());
 
+  std::string missing;  // the cameras without an image in this set (a degraded set)
+  for (int i = 0; i < n; ++i)
+    if (rgb[i].empty()) missing += (missing.empty() ? "" : ", ") + cameras_[i].name;
+
   if (!backgroundReady()) {
     const auto t0 = Clock::now();
-    const LearningVerdict v = checkLearningFrame(rgb, &r.warnings);
+    // Every camera's model learns from the same sets: one without some cameras is not learned.
+    const LearningVerdict v = !missing.empty() ? LearningVerdict::kSkip
+                                               : checkLearningFrame(rgb, &r.warnings);
+    if (!missing.empty())
+      r.warnings.push_back("frame set not learned into the background: no image from " + missing);
     if (v != LearningVerdict::kEndLearning) {
       if (v == LearningVerdict::kLearn)
         for (int i = 0; i < n; ++i) backgrounds_[i].addLearningFrame(rgb[i]);
@@ -245,54 +373,10 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
   r.status = FrameResult::Status::kReconstructed;
   r.background_frames = backgrounds_[0].learnedFrames();
 
-  // --- classification
-  auto t0 = Clock::now();
-  std::vector<const BackgroundModel*> bg;
-  for (const auto& b : backgrounds_) bg.push_back(&b);
-  r.stats = classifier_.classify(rgb, bg, likelihoods_, params_.threads);
-  r.times.classify = msSince(t0);
-
-  // --- evidence (dark cameras switched off)
-  t0 = Clock::now();
-  r.camera_active.assign(n, true);
-  std::vector<ViewImage> body_views(n), skin_views(n);
-  for (int i = 0; i < n; ++i) {
-    const auto& s = r.stats[i];
-    if (s.darkFraction() > params_.dark_camera_fraction) {
-      r.camera_active[i] = false;
-      r.warnings.push_back(cameras_[i].name + ": " + percent(s.darkFraction()) +
-                           " of the image is too dark for colour (covered lens or camera off?): "
-                           "the view is left out of this frame");
-    } else if (s.saturatedFraction() > params_.saturated_warning_fraction) {
-      r.warnings.push_back(cameras_[i].name + ": " + percent(s.saturatedFraction()) +
-                           " of the pixels are saturated (overexposed): colours are unreliable");
-    }
-    body_views[i].likelihood = likelihoods_[i];
-    body_views[i].channel = 0;
-    skin_views[i].likelihood = likelihoods_[i];
-    skin_views[i].channel = 1;
-    if (!r.camera_active[i]) {
-      const cv::Mat off = cv::Mat::zeros(likelihoods_[i].size(), CV_8UC1);
-      body_views[i].active = off;
-      skin_views[i].active = off;
-    }
-  }
-  body_evidence_.set(body_views, params_.body.multi_projection, params_.threads,
-                     params_.body.footprint ? params_.body_footprint : FootprintFilter());
-  skin_evidence_.set(skin_views, params_.skin.multi_projection, params_.threads,
-                     params_.skin.footprint ? params_.skin_footprint : FootprintFilter());
-  r.times.evidence = msSince(t0);
-
-  // --- workspace volumes
-  t0 = Clock::now();
-  body_fusion_.fuse(*table_, body_evidence_, &r.body);
-  r.times.body = msSince(t0);
-  t0 = Clock::now();
-  skin_fusion_.fuse(*table_, skin_evidence_, &r.skin);
-  r.times.skin = msSince(t0);
+  fuseWorkspace(rgb, backgrounds_, &r);
 
   // --- hand sub-volumes (grids move with the hands: projected on the fly)
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   while (hand_tables_.size() < hand_rois.size()) hand_tables_.emplace_back();
   r.hands.resize(hand_rois.size());
   for (size_t h = 0; h < hand_rois.size(); ++h) {

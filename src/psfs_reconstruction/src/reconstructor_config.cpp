@@ -43,6 +43,7 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
       .add("background_model/learning_change_sigmas", &p.background.learning_change_sigmas)
       .add("background_model/learning_change_fraction", &p.background.learning_change_fraction)
       .add("background_model/min_learning_frames", &p.background.min_learning_frames)
+      .add("background_model/learning_max_occupied_litres", &p.learning_max_occupied_litres)
       .add("background_model/update", &p.update_background)
       .add("background_model/mask_margin_px", &p.mask_margin_px);
   s->add("volume/workspace_min", &p.workspace.min_corner)

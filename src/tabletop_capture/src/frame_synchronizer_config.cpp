@@ -1,5 +1,6 @@
 #include "tabletop_capture/frame_synchronizer_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -14,6 +15,8 @@ FrameSetAssemblerConfig FrameSynchronizerConfig::assembler() const {
   if (!(tolerance >= 0.0 && std::isfinite(tolerance))) fail("tolerance", "must be finite and >= 0");
   if (!(timeout > 0.0)) fail("timeout", "must be > 0");
   if (max_pending < 1) fail("max_pending", "must be >= 1");
+  if (max_missing_cameras < 0) fail("max_missing_cameras", "must be >= 0");
+  if (absent_after < 1) fail("absent_after", "must be >= 1");
   if (!(time_jump_threshold > 0.0)) fail("time_jump_threshold", "must be > 0");
   if (world_frame.empty()) fail("world_frame", "must not be empty");
   if (!(tf_timeout >= 0.0 && tf_timeout <= 10.0)) fail("tf_timeout", "must lie in [0, 10] s");
@@ -26,6 +29,9 @@ FrameSetAssemblerConfig FrameSynchronizerConfig::assembler() const {
   a.tolerance = tolerance;
   a.timeout = timeout;
   a.max_pending = static_cast<std::size_t>(max_pending);
+  // pSfS needs two views: a set keeps at least two cameras (all of them on a 1-camera rig).
+  a.max_missing = std::min(max_missing_cameras, std::max(0, num_cameras - 2));
+  a.absent_after = absent_after;
   return a;
 }
 
@@ -35,6 +41,8 @@ void addFrameSynchronizerKeys(FrameSynchronizerConfig* c, tabletop_common::Confi
       .add("tolerance", &c->tolerance)
       .add("timeout", &c->timeout)
       .add("max_pending", &c->max_pending)
+      .add("max_missing_cameras", &c->max_missing_cameras)
+      .add("absent_after", &c->absent_after)
       .add("time_jump_threshold", &c->time_jump_threshold)
       .add("world_frame", &c->world_frame)
       .add("tf_timeout", &c->tf_timeout)

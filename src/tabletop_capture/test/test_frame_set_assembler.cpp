@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <map>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -202,6 +203,64 @@ TEST(FrameSetAssembler, DroppedCameraTimesOutAndLaterSetsFlow) {
   EXPECT_EQ(n.late, 0u);
 }
 
+TEST(FrameSetAssembler, DegradedSetsCarryOnWithoutASilentCamera) {
+  // As above, with max_missing 1: the sets without camera 5 are emitted partial instead of
+  // dropped. Sets 10..12 wait for it (timeout 0.09 s: each leaves when the first image of the
+  // set three periods later arrives); then camera 5 has missed absent_after = 3 sets in a row
+  // and sets 13..19 no longer wait: each leaves with its last image. Set 20 waits for camera 5
+  // again (its image came back) and is complete.
+  FrameSetAssemblerConfig cfg = makeConfig(8, 0.0, 0.09, 8);
+  cfg.max_missing = 1;
+  cfg.absent_after = 3;
+  FrameSetAssembler<int> a(cfg);
+  std::vector<AddResult> last_add(40);
+  for (int k = 0; k < 40; ++k) {
+    for (int c = 0; c < 8; ++c) {
+      if (c == 5 && k >= 10 && k < 20) continue;
+      last_add[k] = a.add(c, setStamp(k), tag(k, c));
+    }
+    EXPECT_EQ(a.absent(5), k >= 15 && k < 20) << "after set " << k;
+  }
+  const auto out = a.takeCompleted();
+  ASSERT_EQ(out.size(), 40u);
+  expectStrictlyIncreasing(out);
+  for (int k = 0; k < 40; ++k) {
+    const bool silent = k >= 10 && k < 20;
+    EXPECT_EQ(out[k].stamp, setStamp(k));
+    EXPECT_EQ(out[k].complete(), !silent) << "set " << k;
+    for (int c = 0; c < 8; ++c) {
+      EXPECT_EQ(out[k].present[c], !(silent && c == 5)) << "set " << k << " camera " << c;
+      if (out[k].present[c]) EXPECT_EQ(out[k].frames[c], tag(k, c));
+    }
+    // From set 15 on (camera 5 absent after sets 10..12 left) a set leaves with its last image.
+    if (k >= 15) EXPECT_EQ(last_add[k], AddResult::kCompleted) << "set " << k;
+  }
+  const auto& n = a.counters();
+  EXPECT_EQ(n.complete, 30u);
+  EXPECT_EQ(n.partial, 10u);
+  EXPECT_EQ(n.incomplete(), 0u);
+  std::vector<uint64_t> missing(8, 0);
+  missing[5] = 10;
+  EXPECT_EQ(n.missing_per_camera, missing);
+}
+
+TEST(FrameSetAssembler, DegradedSetsStillNeedAllButMaxMissing) {
+  // Two of four cameras silent with max_missing 1: nothing may be emitted from two views.
+  FrameSetAssemblerConfig cfg = makeConfig(4, 0.0, 0.09, 8);
+  cfg.max_missing = 1;
+  FrameSetAssembler<int> a(cfg);
+  for (int k = 0; k < 20; ++k)
+    for (int c = 0; c < 4; ++c)
+      if (!(k >= 5 && k < 15 && (c == 1 || c == 2))) a.add(c, setStamp(k), tag(k, c));
+  a.expire(setStamp(30));
+  const auto out = a.takeCompleted();
+  ASSERT_EQ(out.size(), 10u);
+  for (const auto& set : out) EXPECT_TRUE(set.complete());
+  EXPECT_EQ(a.counters().partial, 0u);
+  EXPECT_EQ(a.counters().incomplete(), 10u);
+  EXPECT_EQ(a.counters().missing_per_camera, (std::vector<uint64_t>{0, 10, 10, 0}));
+}
+
 TEST(FrameSetAssembler, ExpireFlushesWhenStreamsStop) {
   FrameSetAssembler<int> a(makeConfig(3, 0.0, 0.2, 8));
   a.add(0, 5.0, 1);
@@ -292,6 +351,14 @@ TEST(FrameSetAssembler, InvalidConfigThrows) {
   EXPECT_THROW(FrameSetAssembler<int>(makeConfig(2, 0.0, 0.5, 0)), std::invalid_argument);
   EXPECT_NO_THROW(FrameSetAssembler<int>(
       makeConfig(2, 0.0, std::numeric_limits<double>::infinity(), 1)));
+  FrameSetAssemblerConfig c = makeConfig(3, 0.0, 0.5, 8);
+  c.max_missing = 3;  // a set needs at least one camera
+  EXPECT_THROW(FrameSetAssembler<int>{c}, std::invalid_argument);
+  c.max_missing = -1;
+  EXPECT_THROW(FrameSetAssembler<int>{c}, std::invalid_argument);
+  c.max_missing = 2;
+  c.absent_after = 0;
+  EXPECT_THROW(FrameSetAssembler<int>{c}, std::invalid_argument);
 }
 
 TEST(FrameSetAssembler, ResetAfterBackwardTimeJump) {
@@ -324,26 +391,28 @@ TEST(FrameSetAssembler, PayloadsOfDroppedSetsReleased) {
 }
 
 // Random loss and per-camera delays: whatever happens, output is strictly increasing, every
-// emitted frame is the one sent for that set and camera, and every set is accounted for.
-TEST(FrameSetAssembler, RandomLossAndDelayInvariants) {
+// emitted frame is the one sent for that set and camera, and every set is accounted for. With
+// max_missing 1, a set that lost one image is emitted partial, without exactly that camera.
+void randomLossAndDelay(int max_missing) {
   const int n = 8, sets = 500;
-  FrameSetAssembler<int> a(makeConfig(n, 0.0, 0.2, 8));
+  FrameSetAssemblerConfig cfg = makeConfig(n, 0.0, 0.2, 8);
+  cfg.max_missing = max_missing;
+  FrameSetAssembler<int> a(cfg);
   std::mt19937 rng(123);
   std::bernoulli_distribution lose(0.01);
   std::uniform_int_distribution<int> lag(0, 3);
   // Each camera's stream is FIFO; the interleaving between cameras is random.
   std::vector<std::deque<int>> queues(n);
-  std::set<int> lost_sets;
+  std::map<int, std::set<int>> lost;  // set -> cameras lost
   for (int k = 0; k < sets; ++k) {
     for (int c = 0; c < n; ++c) {
       if (lose(rng)) {
-        lost_sets.insert(k);
+        lost[k].insert(c);
       } else {
         queues[c].push_back(k);
       }
     }
   }
-  std::vector<int> progress(n, 0);
   std::vector<FrameSet<int>> out;
   for (int t = 0; t < sets + 10; ++t) {
     for (int c = 0; c < n; ++c) {
@@ -358,17 +427,29 @@ TEST(FrameSetAssembler, RandomLossAndDelayInvariants) {
     for (auto& s : a.takeCompleted()) out.push_back(std::move(s));
   }
   a.expire(setStamp(sets + 100));
+  for (auto& s : a.takeCompleted()) out.push_back(std::move(s));
   expectStrictlyIncreasing(out);
+  size_t one_lost = 0;
+  for (const auto& l : lost) one_lost += l.second.size() == 1;
   for (const auto& s : out) {
     const int k = static_cast<int>(std::lround((s.stamp - kT0) / kPeriod));
-    EXPECT_EQ(lost_sets.count(k), 0u) << k;
-    for (int c = 0; c < n; ++c) EXPECT_EQ(s.frames[c], tag(k, c));
+    const std::set<int> none;
+    const std::set<int>& gone = lost.count(k) ? lost.at(k) : none;
+    EXPECT_LE(gone.size(), static_cast<size_t>(max_missing)) << k;
+    for (int c = 0; c < n; ++c) {
+      EXPECT_EQ(s.present[c], gone.count(c) == 0) << k << " " << c;
+      if (s.present[c]) EXPECT_EQ(s.frames[c], tag(k, c));
+    }
   }
   const auto& cnt = a.counters();
-  EXPECT_EQ(cnt.complete, out.size());
-  EXPECT_GE(out.size(), static_cast<size_t>(sets * 0.85));
+  EXPECT_EQ(cnt.complete + cnt.partial, out.size());
+  EXPECT_EQ(cnt.partial, max_missing > 0 ? one_lost : 0u);
+  EXPECT_GE(cnt.complete, static_cast<size_t>(sets * 0.85));
   // Every set was either emitted or dropped (no set is left pending after expire()).
   EXPECT_EQ(a.pendingCount(), 0u);
-  EXPECT_EQ(cnt.complete + cnt.incomplete(), static_cast<uint64_t>(sets));
-  EXPECT_EQ(cnt.incomplete(), lost_sets.size());
+  EXPECT_EQ(cnt.complete + cnt.partial + cnt.incomplete(), static_cast<uint64_t>(sets));
+  EXPECT_EQ(cnt.incomplete(), lost.size() - cnt.partial);
 }
+
+TEST(FrameSetAssembler, RandomLossAndDelayInvariants) { randomLossAndDelay(0); }
+TEST(FrameSetAssembler, RandomLossAndDelayInvariantsDegraded) { randomLossAndDelay(1); }

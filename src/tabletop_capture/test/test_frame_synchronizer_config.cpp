@@ -27,6 +27,8 @@ TEST(FrameSynchronizerConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.tolerance, d.tolerance);
   EXPECT_EQ(c.timeout, d.timeout);
   EXPECT_EQ(c.max_pending, d.max_pending);
+  EXPECT_EQ(c.max_missing_cameras, d.max_missing_cameras);
+  EXPECT_EQ(c.absent_after, d.absent_after);
   EXPECT_EQ(c.time_jump_threshold, d.time_jump_threshold);
   EXPECT_EQ(c.world_frame, d.world_frame);
   EXPECT_EQ(c.tf_timeout, d.tf_timeout);
@@ -42,6 +44,23 @@ TEST(FrameSynchronizerConfig, BadFilesNameTheFileAndTheKey) {
   EXPECT_NE(errorOf("num_cameras: eight\n").find("num_cameras: wrong type"), std::string::npos);
   EXPECT_NE(errorOf("max_pending: 0\n").find("max_pending: must be >= 1"), std::string::npos);
   EXPECT_NE(errorOf("camera_prefix: \"\"\n").find("camera_prefix"), std::string::npos);
+  EXPECT_NE(errorOf("max_missing_cameras: -1\n").find("max_missing_cameras: must be >= 0"),
+            std::string::npos);
+  EXPECT_NE(errorOf("absent_after: 0\n").find("absent_after: must be >= 1"), std::string::npos);
+}
+
+// Degraded output keeps at least two views: max_missing_cameras is clamped to num_cameras - 2.
+TEST(FrameSynchronizerConfig, MissingCamerasLeaveAtLeastTwoViews) {
+  FrameSynchronizerConfig c;
+  c.num_cameras = 8;
+  c.max_missing_cameras = 2;
+  EXPECT_EQ(c.assembler().max_missing, 2);
+  c.num_cameras = 3;
+  EXPECT_EQ(c.assembler().max_missing, 1);
+  c.num_cameras = 2;
+  EXPECT_EQ(c.assembler().max_missing, 0);
+  c.num_cameras = 1;
+  EXPECT_EQ(c.assembler().max_missing, 0);
 }
 
 // With a 15 ms tolerance, images 10 ms apart make one set; tuned to 0 (hardware sync) the next

@@ -64,8 +64,19 @@ void CameraFaults::command(const std::string& text, double now) {
   } else if (kind == "brightness") {
     f.gain = number(in, text, "gain");
     if (!(f.gain > 0 && f.gain <= 10)) bad(text, "gain must be in (0, 10]");
+  } else if (kind == "frame") {
+    f.camera = camera();
+    if (!(in >> f.encoding)) bad(text, "missing frame_id");
+  } else if (kind == "tf") {
+    f.camera = camera();
+    for (int k = 0; k < 3; ++k) {
+      f.shift[k] = number(in, text, "shift");
+      if (std::abs(f.shift[k]) > 10) bad(text, "shift must be within 10 m");
+    }
+  } else if (kind == "clock") {
+    f.shift[0] = number(in, text, "offset");
   } else {
-    bad(text, "unknown command (stop, encoding, size, nan_info, brightness, clear)");
+    bad(text, "unknown command (stop, encoding, size, nan_info, brightness, frame, tf, clock, clear)");
   }
   const double seconds = number(in, text, "seconds");
   if (seconds < 0) bad(text, "seconds must be >= 0");
@@ -85,8 +96,18 @@ CameraFaultEffect CameraFaults::effect(int camera, double now) const {
     if (f.kind == "encoding") e.encoding = f.encoding;
     if (f.kind == "size") e.width = f.width, e.height = f.height;
     if (f.kind == "brightness") e.gain = f.gain;
+    if (f.kind == "frame") e.frame_id = f.encoding;
+    if (f.kind == "tf")
+      for (int k = 0; k < 3; ++k) e.tf_shift[k] = f.shift[k];
   }
   return e;
+}
+
+double CameraFaults::clockOffset(double now) const {
+  double offset = 0;
+  for (const Fault& f : faults_)
+    if (f.kind == "clock" && f.activeAt(now)) offset = f.shift[0];
+  return offset;
 }
 
 std::string CameraFaults::describe(double now) const {
@@ -94,7 +115,8 @@ std::string CameraFaults::describe(double now) const {
   for (const Fault& f : faults_) {
     if (!f.activeAt(now)) continue;
     if (!out.empty()) out += ", ";
-    out += f.kind + (f.camera >= 0 ? " cam" + std::to_string(f.camera) : f.kind == "brightness" ? "" : " all");
+    const bool global = f.kind == "brightness" || f.kind == "clock";
+    out += f.kind + (f.camera >= 0 ? " cam" + std::to_string(f.camera) : global ? "" : " all");
   }
   return out;
 }

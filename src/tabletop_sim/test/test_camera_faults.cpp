@@ -36,6 +36,25 @@ TEST(CameraFaults, CommandsApplyToTheirCameraForTheirTime) {
   EXPECT_EQ(f.describe(12.0), "");
 }
 
+TEST(CameraFaults, FrameTfAndClockFaults) {
+  CameraFaults f(4);
+  f.command("frame 1 cam1_unknown_frame 2", 10.0);
+  f.command("tf 2 0.01 -0.02 0 1", 10.0);
+  f.command("clock -30 0", 10.5);
+  EXPECT_EQ(f.effect(1, 11.0).frame_id, "cam1_unknown_frame");
+  EXPECT_EQ(f.effect(1, 12.0).frame_id, "");
+  EXPECT_EQ(f.effect(0, 11.0).frame_id, "");
+  EXPECT_TRUE(f.effect(2, 10.5).tfShifted());
+  EXPECT_DOUBLE_EQ(f.effect(2, 10.5).tf_shift[1], -0.02);
+  EXPECT_FALSE(f.effect(2, 11.0).tfShifted());
+  EXPECT_FALSE(f.effect(2, 10.5).any());  // not an image fault
+  EXPECT_DOUBLE_EQ(f.clockOffset(10.4), 0.0);
+  EXPECT_DOUBLE_EQ(f.clockOffset(100.0), -30.0);  // until clear
+  EXPECT_EQ(f.describe(10.6), "frame cam1, tf cam2, clock");
+  f.command("clear", 101.0);
+  EXPECT_DOUBLE_EQ(f.clockOffset(101.0), 0.0);
+}
+
 TEST(CameraFaults, BadCommandsAreRefusedWithTheReason) {
   CameraFaults f(2);
   const auto refused = [&](const char* c, const char* why) {
@@ -57,6 +76,10 @@ TEST(CameraFaults, BadCommandsAreRefusedWithTheReason) {
   refused("size 0 0 10 1", "size out of range");
   refused("brightness 0 1", "gain must be");
   refused("brightness nan 1", "bad gain");
+  refused("frame 0", "missing frame_id");
+  refused("tf 0 0 0 1", "missing seconds");
+  refused("tf 0 11 0 0 1", "within 10 m");
+  refused("clock x 1", "bad offset");
   refused("stop 0 1 extra", "unexpected");
   EXPECT_FALSE(f.effect(0, 0.5).any());  // nothing half-applied
 }

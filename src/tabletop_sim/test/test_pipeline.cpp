@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <map>
 #include <mutex>
 
@@ -349,6 +350,108 @@ TEST_F(PipelineTest, SynchroniserSurvivesBadInput) {
   EXPECT_NE(last_diag.find("sets incomplete (dropped)=8|"), std::string::npos) << last_diag;
   EXPECT_NE(last_diag.find("late images (dropped)=1|"), std::string::npos) << last_diag;
   EXPECT_NE(last_diag.find("sets published=3|"), std::string::npos) << last_diag;
+}
+
+// Degraded sets on a 3-camera synchroniser (max_missing_cameras 2, clamped to 1; absent_after 2):
+// a camera that never sends, or stops, costs its slot, not the set. Its slot holds an empty image
+// with its calibration; with two cameras silent, sets are dropped.
+TEST_F(PipelineTest, SynchroniserPublishesSetsWithoutASilentCamera) {
+  ros::NodeHandle nh;
+  ros::param::set("/degraded/frame_synchronizer/num_cameras", 3);
+  // A timeout far above any delivery delay on a slow or busy machine: here the sets that wait
+  // for a silent camera leave when the next phase's newer stamps (1 s later) arrive.
+  ros::param::set("/degraded/frame_synchronizer/timeout", 0.5);
+  ros::param::set("/degraded/frame_synchronizer/absent_after", 2);
+  FrameLog out;
+  boost::function<void(const tabletop_msgs::MultiViewFrame::ConstPtr&)> on_frame =
+      [&](const tabletop_msgs::MultiViewFrame::ConstPtr& m) { out.add(m); };
+  ros::Subscriber sub = nh.subscribe<tabletop_msgs::MultiViewFrame>("/degraded/frames", 50, on_frame);
+  ASSERT_TRUE(load("/degraded/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
+
+  RigDescription rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{3, 32, 24, false});
+  // Frames of its own: the other tests' static tf must not matter.
+  tf2_ros::StaticTransformBroadcaster static_tf;
+  std::vector<geometry_msgs::TransformStamped> tfs;
+  for (auto& cam : rig.cameras) {
+    cam.frame_id = "degraded_" + cam.frame_id;
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time::now();
+    t.header.frame_id = "world";
+    t.child_frame_id = cam.frame_id;
+    t.transform = toTransform(cam.world_T_camera);
+    tfs.push_back(t);
+  }
+  static_tf.sendTransform(tfs);
+  ros::Publisher img_pub[3], info_pub[3];
+  for (int i = 0; i < 3; ++i) {
+    img_pub[i] = nh.advertise<sensor_msgs::Image>("/degraded/cam" + std::to_string(i) + "/image_raw", 50);
+    info_pub[i] = nh.advertise<sensor_msgs::CameraInfo>(
+        "/degraded/cam" + std::to_string(i) + "/camera_info", 5, true);
+    info_pub[i].publish(toCameraInfo(rig.cameras[i]));
+  }
+  ASSERT_TRUE(waitFor([&] {
+    for (int i = 0; i < 3; ++i)
+      if (!img_pub[i].getNumSubscribers() || !info_pub[i].getNumSubscribers()) return false;
+    return true;
+  }, 10.0));
+  ros::WallDuration(0.3).sleep();  // camera_info and tf in
+  auto set = [&](double stamp, std::initializer_list<int> cams) {
+    for (int c : cams) {
+      sensor_msgs::ImagePtr m(new sensor_msgs::Image);
+      m->header.stamp = ros::Time(stamp);
+      m->header.frame_id = rig.cameras[c].frame_id;
+      m->encoding = "rgb8";
+      m->width = 32;
+      m->height = 24;
+      m->step = 96;
+      m->data.assign(96 * 24, static_cast<uint8_t>(10 + c));
+      img_pub[c].publish(m);
+    }
+    ros::WallDuration(0.04).sleep();
+  };
+  // 1. cam2 has never sent an image (but its camera_info and tf are known): sets without it.
+  for (int k = 0; k < 5; ++k) set(20.0 + 0.04 * k, {0, 1});
+  // 2. All three.
+  for (int k = 0; k < 3; ++k) set(21.0 + 0.04 * k, {0, 1, 2});
+  // 3. cam1 stops.
+  for (int k = 0; k < 5; ++k) set(22.0 + 0.04 * k, {0, 2});
+  // 4. cam1 and cam2 silent: one view is not enough (max_missing 1): dropped.
+  for (int k = 0; k < 3; ++k) set(23.0 + 0.04 * k, {0});
+  // 5. All three again.
+  set(24.0, {0, 1, 2});
+  ASSERT_TRUE(waitFor([&] { return out.size() >= 14; }, 5.0)) << out.size() << " sets";
+  ros::WallDuration(0.5).sleep();
+  std::lock_guard<std::mutex> lock(out.mutex);
+  ASSERT_EQ(out.frames.size(), 14u);
+  // The camera that must be missing from a set, and the one that may be: the first set after
+  // a camera comes back may still leave without it (the synchroniser learns that it is back
+  // from that very image, which arrives after the others').
+  auto mustMiss = [](double t) { return t < 20.5 ? 2 : (t > 21.5 && t < 22.5) ? 1 : -1; };
+  auto mayMiss = [](double t) { return std::abs(t - 21.0) < 1e-6 ? 2 : std::abs(t - 24.0) < 1e-6 ? 2 : -1; };
+  for (size_t k = 0; k < out.frames.size(); ++k) {
+    const auto& f = *out.frames[k];
+    const double t = f.header.stamp.toSec();
+    ASSERT_EQ(f.images.size(), 3u);
+    for (int c = 0; c < 3; ++c) {
+      const auto& im = f.images[c];
+      EXPECT_EQ(f.camera_names[c], "cam" + std::to_string(c));
+      EXPECT_EQ(f.camera_infos[c].header.frame_id, rig.cameras[c].frame_id);
+      EXPECT_DOUBLE_EQ(f.camera_infos[c].K[0], rig.cameras[c].fx) << "set " << t << " cam" << c;
+      EXPECT_NEAR(f.camera_poses[c].translation.x, rig.cameras[c].world_T_camera.translation().x(), 1e-9);
+      if (im.width == 0) {
+        EXPECT_TRUE(c == mustMiss(t) || c == mayMiss(t)) << "set " << t << " lacks cam" << c;
+        EXPECT_EQ(im.height, 0u);
+        EXPECT_TRUE(im.data.empty());
+        EXPECT_EQ(im.header.stamp, f.header.stamp);
+      } else {
+        EXPECT_NE(c, mustMiss(t)) << "set " << t << " has cam" << c;
+        EXPECT_EQ(im.width, 32u);
+        ASSERT_EQ(im.data.size(), 96u * 24u);
+        EXPECT_EQ(im.data[0], 10 + c);
+      }
+    }
+  }
+  EXPECT_DOUBLE_EQ(out.frames.back()->header.stamp.toSec(), 24.0);
 }
 
 // The rig publisher turns the committed rig YAML into latched camera_info and static tf.

@@ -231,8 +231,14 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       NODELET_WARN_THROTTLE(10.0, "cve_bridge: face video: frame set ignored: %s", why.c_str());
       return;
     }
-    const int c = pickFaceCamera(cams, head);
-    if (c < 0) return;
+    // Among the cameras that delivered an image (a degraded set has empty slots).
+    std::vector<tabletop_capture::CameraModel> seeing;
+    std::vector<int> index;
+    for (size_t i = 0; i < cams.size(); ++i)
+      if (!images[i].empty()) seeing.push_back(cams[i]), index.push_back(static_cast<int>(i));
+    const int k = pickFaceCamera(seeing, head);
+    if (k < 0) return;
+    const int c = index[k];
     std::vector<uint8_t> message;
     try {  // OpenCV or the encoder may throw (memory, a picture over the size limit)
       cv::Mat face;

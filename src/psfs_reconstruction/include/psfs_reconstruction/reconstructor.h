@@ -15,7 +15,9 @@
 // leaving the models as they were. A rig that changes on purpose (another camera count or image
 // size) resets the background models and relearns them; a calibration change only rebuilds the
 // projection tables. Cameras that deliver an (almost) all-dark image are switched off for the
-// frame and reported, so a covered lens degrades the volume instead of carving it.
+// frame and reported, so a covered lens degrades the volume instead of carving it. An empty image
+// (a camera missing from a degraded frame set) switches its camera off the same way, and such a
+// set is not learned into the background.
 #pragma once
 
 #include <memory>
@@ -83,6 +85,10 @@ struct ReconstructorParams {
   double dark_camera_fraction = 0.9;
   // Saturated-pixel fraction above which a camera is reported as overexposed (it still counts).
   double saturated_warning_fraction = 0.3;
+  // Relearning (a relearn request, a time jump) with models learned before: a learning set in
+  // which those models see more body volume than this (litres, at the body threshold) is not
+  // empty and is not learned. An empty workspace shows well under 0.1 l; a hand ~0.4 l.
+  double learning_max_occupied_litres = 0.3;
   int threads = 0;  // OpenMP threads for every stage (0 = OpenMP default)
 
   static PsfsOptions defaultBody() {
@@ -122,7 +128,7 @@ struct FrameResult {
   ProbabilityVolume body, skin;
   std::vector<ProbabilityVolume> hands;  // one per requested ROI, same order
   std::vector<ClassificationStats> stats;
-  std::vector<bool> camera_active;  // false = switched off this frame (dark)
+  std::vector<bool> camera_active;  // false = switched off this frame (dark, or no image)
   StageTimes times;
   // Things the caller should report (throttled): dark or overexposed cameras, rig changes.
   std::vector<std::string> warnings;
@@ -136,7 +142,7 @@ class Reconstructor {
 
   const ReconstructorParams& params() const { return params_; }
 
-  // One frame set: rgb8 images in the cameras' order. hand_rois: centres (world, m) of the hand
+  // One frame set: rgb8 images in the cameras' order (an empty Mat: that camera is missing). hand_rois: centres (world, m) of the hand
   // sub-volumes wanted this frame. foreground_masks: optional CV_8UC1 per camera (nonzero =
   // foreground, e.g. the body tracker's silhouettes, which also cover the person outside the
   // grid) that mask the background update together with the volume's back-projection (their
@@ -155,7 +161,8 @@ class Reconstructor {
 
   bool backgroundReady() const;
   int numCameras() const { return static_cast<int>(cameras_.size()); }
-  // Drops the background models: the next frames are learned again.
+  // Drops the background models: the next frames are learned again. If the scene is not empty
+  // for learning_frames sets in a row, the models dropped here are used again (reported).
   void resetBackground();
   // Saves each camera's model as <directory>/<camera name>.bgm. Throws std::runtime_error if
   // the model is not ready or a file cannot be written.
@@ -185,6 +192,10 @@ class Reconstructor {
   enum class LearningVerdict { kLearn, kSkip, kEndLearning };
   LearningVerdict checkLearningFrame(const std::vector<cv::Mat>& rgb,
                                      std::vector<std::string>* warnings);
+  LearningVerdict skipLearningFrame(const std::string& why, std::vector<std::string>* warnings);
+  void fuseWorkspace(const std::vector<cv::Mat>& rgb, const std::vector<BackgroundModel>& backgrounds,
+                     FrameResult* r);
+  double occupiedLitresAgainstPrevious(const std::vector<cv::Mat>& rgb);
 
   ReconstructorParams params_;
   PixelClassifier classifier_;
@@ -192,6 +203,9 @@ class Reconstructor {
   std::vector<tabletop_capture::CameraModel> cameras_;
   std::vector<BackgroundModel> backgrounds_;
   std::vector<BackgroundModel> loaded_backgrounds_;  // waiting for their rig
+  // The models in use when resetBackground() was last called: taken back when the new learning
+  // never sees an empty scene (a relearn or a time jump with the person in view).
+  std::vector<BackgroundModel> previous_backgrounds_;
   std::vector<std::string> loaded_names_;
   std::unique_ptr<ProjectionTable> table_;          // workspace grid (body and skin)
   std::vector<std::unique_ptr<ProjectionTable>> hand_tables_;

@@ -33,6 +33,7 @@
 //   ~world_frame          frame of the volumes                               [world]
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -554,13 +555,26 @@ class PsfsNodelet : public nodelet::Nodelet {
   }
 
   // One line per distinct message every 5 s (the throttle macros would merge them all).
+  // Throttled per kind of warning: numbers that stand alone (percentages, litres, stamps) do
+  // not make a new kind, camera names (cam3) do.
   void warnThrottled(const std::string& w) {
+    std::string key;
+    for (size_t i = 0; i < w.size(); ++i) {
+      const bool number_start = std::isdigit(static_cast<unsigned char>(w[i])) &&
+                                (i == 0 || !std::isalpha(static_cast<unsigned char>(w[i - 1])));
+      if (!number_start) {
+        key += w[i];
+        continue;
+      }
+      key += '#';
+      while (i + 1 < w.size() && (std::isdigit(static_cast<unsigned char>(w[i + 1])) || w[i + 1] == '.')) ++i;
+    }
     const ros::WallTime now = ros::WallTime::now();
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++warnings_;
-    auto it = warned_.find(w);
+    auto it = warned_.find(key);
     if (it != warned_.end() && (now - it->second).toSec() < 5.0) return;
-    warned_[w] = now;
+    warned_[key] = now;
     if (warned_.size() > 256) warned_.clear();
     NODELET_WARN("psfs: %s", w.c_str());
   }

@@ -22,8 +22,13 @@
 //   (or the `now_stamp` given to expire()) is dropped as incomplete. Call expire() from a timer
 //   so the last sets are flushed when all streams stop.
 // - Bound: at most `max_pending` sets are pending; opening one more drops the oldest.
-// - Every dropped set adds one to missing_per_camera[c] for each camera c it lacked, so
-//   diagnostics can name a dead or lossy camera.
+// - Degraded sets (max_missing > 0): a set that lacks at most max_missing cameras is emitted
+//   (partial, its `present` flags say which cameras are in it) wherever it would otherwise be
+//   dropped (timeout, superseded, overflow), so that a silent camera costs that camera, not the
+//   whole set. A camera that missed `absent_after` emitted or dropped sets in a row is absent:
+//   sets stop waiting for it (no timeout latency per set) until its next image arrives.
+// - Every dropped or partial set adds one to missing_per_camera[c] for each camera c it lacked,
+//   so diagnostics can name a dead or lossy camera.
 // - Time going backwards (bag restarted, /clock reset) makes everything late: call reset().
 //
 // Not thread-safe: the caller serialises add()/expire()/takeCompleted() (one mutex in the node).
@@ -48,14 +53,19 @@ struct FrameSetAssemblerConfig {
   double tolerance = 0.0;     // seconds; 0 = stamps must be equal (hardware sync)
   double timeout = 0.5;       // seconds; +infinity disables the stamp-based timeout
   std::size_t max_pending = 8;  // pending (incomplete) sets kept at most
+  int max_missing = 0;   // a set lacking at most this many cameras is emitted partial (0: never)
+  int absent_after = 3;  // sets missed in a row before a camera is no longer waited for
 };
 
-// One complete set. frames[c] / stamps[c] belong to camera c.
+// One emitted set. frames[c] / stamps[c] belong to camera c; for a camera not in a partial set
+// present[c] is false, frames[c] default-constructed and stamps[c] 0.
 template <typename T>
 struct FrameSet {
   double stamp = 0.0;  // earliest image stamp (= the common stamp in exact mode)
   std::vector<double> stamps;
   std::vector<T> frames;
+  std::vector<bool> present;
+  bool complete() const { return std::find(present.begin(), present.end(), false) == present.end(); }
 };
 
 // Outcome of one add(). Only kPending and kCompleted keep the image.
@@ -84,7 +94,8 @@ inline const char* toString(AddResult r) {
 }
 
 struct FrameSetCounters {
-  std::uint64_t complete = 0;            // sets emitted
+  std::uint64_t complete = 0;            // complete sets emitted
+  std::uint64_t partial = 0;             // sets emitted without some cameras (max_missing)
   std::uint64_t incomplete_timeout = 0;  // dropped: older than timeout
   std::uint64_t incomplete_superseded = 0;  // dropped: a newer set completed first
   std::uint64_t incomplete_overflow = 0;    // dropped: more than max_pending pending
@@ -92,7 +103,7 @@ struct FrameSetCounters {
   std::uint64_t duplicate = 0;
   std::uint64_t bad_camera = 0;
   std::uint64_t bad_stamp = 0;
-  // missing_per_camera[c]: dropped sets that lacked camera c (size num_cameras).
+  // missing_per_camera[c]: dropped or partial sets that lacked camera c (size num_cameras).
   std::vector<std::uint64_t> missing_per_camera;
 
   std::uint64_t incomplete() const {
@@ -107,6 +118,7 @@ class FrameSetAssembler {
   // max_pending < 1.
   explicit FrameSetAssembler(const FrameSetAssemblerConfig& config) : config_((validate(config), config)) {
     counters_.missing_per_camera.assign(config_.num_cameras, 0);
+    missed_in_a_row_.assign(config_.num_cameras, 0);
   }
 
   static void validate(const FrameSetAssemblerConfig& c) {
@@ -119,6 +131,10 @@ class FrameSetAssembler {
       throw std::invalid_argument("FrameSetAssembler: timeout must be >= 0");
     if (c.max_pending < 1)
       throw std::invalid_argument("FrameSetAssembler: max_pending must be >= 1");
+    if (c.max_missing < 0 || c.max_missing >= c.num_cameras)
+      throw std::invalid_argument("FrameSetAssembler: max_missing must lie in [0, num_cameras - 1]");
+    if (c.absent_after < 1)
+      throw std::invalid_argument("FrameSetAssembler: absent_after must be >= 1");
   }
 
   AddResult add(int camera, double stamp, T payload) {
@@ -130,6 +146,7 @@ class FrameSetAssembler {
       ++counters_.bad_stamp;
       return AddResult::kBadStamp;
     }
+    missed_in_a_row_[camera] = 0;  // heard from: waited for again, even if this image is late
     if (!have_newest_ || stamp > newest_stamp_) {
       newest_stamp_ = stamp;
       have_newest_ = true;
@@ -161,7 +178,8 @@ class FrameSetAssembler {
     set.frames[camera] = std::move(payload);
     ++set.count;
 
-    if (set.count == config_.num_cameras) {
+    if (set.count == config_.num_cameras || (degraded() && waitingFor(set) == 0 &&
+                                             set.count >= config_.num_cameras - config_.max_missing)) {
       emit(it);
       return AddResult::kCompleted;
     }
@@ -169,22 +187,28 @@ class FrameSetAssembler {
     // dropped (and the image with it), which keeps the watermark rule simple.
     const bool dropped_self = pending_.size() > config_.max_pending && it == pending_.begin();
     while (pending_.size() > config_.max_pending) {
-      drop(pending_.begin(), &counters_.incomplete_overflow);
+      finishIncomplete(pending_.begin(), &counters_.incomplete_overflow);
     }
     return dropped_self ? AddResult::kOverflow : AddResult::kPending;
   }
 
-  // Drops pending sets whose anchor is older than now_stamp - timeout. Returns how many.
+  // Finishes pending sets whose anchor is older than now_stamp - timeout: emitted partial if
+  // they lack at most max_missing cameras, else dropped. Returns how many.
   std::size_t expire(double now_stamp) {
     std::size_t n = 0;
     while (!pending_.empty() && now_stamp - pending_.begin()->first > config_.timeout) {
-      drop(pending_.begin(), &counters_.incomplete_timeout);
+      finishIncomplete(pending_.begin(), &counters_.incomplete_timeout);
       ++n;
     }
     return n;
   }
 
-  // Complete sets in emission order (strictly increasing stamp); clears the queue. The caller
+  // True for a camera sets no longer wait for (it missed absent_after sets in a row).
+  bool absent(int camera) const {
+    return degraded() && missed_in_a_row_[camera] >= config_.absent_after;
+  }
+
+  // Emitted sets in emission order (strictly increasing stamp); clears the queue. The caller
   // must drain it regularly: it is not bounded.
   std::vector<FrameSet<T>> takeCompleted() {
     std::vector<FrameSet<T>> out;
@@ -252,34 +276,67 @@ class FrameSetAssembler {
     have_watermark_ = true;
   }
 
-  void drop(typename Map::iterator it, std::uint64_t* reason) {
-    const Pending& set = it->second;
+  bool degraded() const { return config_.max_missing > 0; }
+
+  // Cameras the set lacks that are not absent.
+  int waitingFor(const Pending& set) const {
+    int n = 0;
+    for (int c = 0; c < config_.num_cameras; ++c) n += !set.present[c] && !absent(c);
+    return n;
+  }
+
+  void countMissing(const Pending& set) {
     for (int c = 0; c < config_.num_cameras; ++c) {
-      if (!set.present[c]) ++counters_.missing_per_camera[c];
+      if (set.present[c]) continue;
+      ++counters_.missing_per_camera[c];
+      ++missed_in_a_row_[c];
     }
+  }
+
+  // A set that will not complete: emitted partial when degraded output allows it, else
+  // dropped and counted under `reason`.
+  void finishIncomplete(typename Map::iterator it, std::uint64_t* reason) {
+    if (degraded() && it->second.count >= config_.num_cameras - config_.max_missing) {
+      emitOne(it);
+      return;
+    }
+    countMissing(it->second);
     ++*reason;
     advanceWatermark(it->first);
     pending_.erase(it);
   }
 
   void emit(typename Map::iterator it) {
-    while (pending_.begin() != it) drop(pending_.begin(), &counters_.incomplete_superseded);
+    while (pending_.begin() != it)
+      finishIncomplete(pending_.begin(), &counters_.incomplete_superseded);
+    emitOne(it);
+  }
+
+  void emitOne(typename Map::iterator it) {
     Pending& set = it->second;
     FrameSet<T> out;
-    out.stamp = set.stamps[0];
-    for (double s : set.stamps) out.stamp = std::min(out.stamp, s);
+    out.stamp = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < config_.num_cameras; ++c)
+      if (set.present[c]) {
+        out.stamp = std::min(out.stamp, set.stamps[c]);
+        missed_in_a_row_[c] = 0;
+      }
+    const bool complete = set.count == config_.num_cameras;
+    if (!complete) countMissing(set);
+    ++(complete ? counters_.complete : counters_.partial);
     out.stamps = std::move(set.stamps);
     out.frames = std::move(set.frames);
+    out.present = std::move(set.present);
     advanceWatermark(it->first);
     pending_.erase(it);
     completed_.push_back(std::move(out));
-    ++counters_.complete;
   }
 
   FrameSetAssemblerConfig config_;
   FrameSetCounters counters_;
   Map pending_;
   std::vector<FrameSet<T>> completed_;
+  std::vector<int> missed_in_a_row_;  // per camera: emitted or dropped sets missed since its last image
   double watermark_ = 0.0;  // anchor of the newest set emitted or dropped
   bool have_watermark_ = false;
   double newest_stamp_ = 0.0;

@@ -16,6 +16,8 @@ struct FrameSynchronizerConfig {
   double tolerance = 0.0;  // s; 0 = hardware sync (identical stamps)
   double timeout = 0.2;    // s
   int max_pending = 10;
+  int max_missing_cameras = 2;  // clamped to num_cameras - 2
+  int absent_after = 3;
   double time_jump_threshold = 1.0;  // s
   std::string world_frame = "world";
   double tf_timeout = 0.05;  // s

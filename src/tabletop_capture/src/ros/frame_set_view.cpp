@@ -15,6 +15,7 @@ bool unpackFrameSet(const tabletop_msgs::MultiViewFrame& f, std::vector<cv::Mat>
            std::to_string(f.camera_names.size()) + " names)";
     return false;
   }
+  size_t missing_views = 0;
   for (size_t i = 0; i < n; ++i) {
     const auto& im = f.images[i];
     const std::string& name = f.camera_names[i];
@@ -22,12 +23,14 @@ bool unpackFrameSet(const tabletop_msgs::MultiViewFrame& f, std::vector<cv::Mat>
       *why = name + ": encoding '" + im.encoding + "', expected rgb8";
       return false;
     }
-    if (im.width == 0 || im.height == 0 || im.step < 3 * im.width ||
-        im.data.size() < size_t(im.step) * im.height) {
+    const bool missing = im.width == 0 && im.height == 0 && im.data.empty();
+    if (!missing && (im.width == 0 || im.height == 0 || im.step < 3 * im.width ||
+                     im.data.size() < size_t(im.step) * im.height)) {
       *why = name + ": image buffer too small for " + std::to_string(im.width) + "x" +
              std::to_string(im.height) + " rgb8";
       return false;
     }
+    missing_views += missing;
     CameraModel cam;
     std::string reason;
     if (!fromCameraInfo(f.camera_infos[i], &cam, &reason)) {
@@ -41,7 +44,14 @@ bool unpackFrameSet(const tabletop_msgs::MultiViewFrame& f, std::vector<cv::Mat>
     cam.name = name;
     cam.frame_id = f.camera_infos[i].header.frame_id;
     cams->push_back(cam);
-    rgb->emplace_back(im.height, im.width, CV_8UC3, const_cast<uint8_t*>(im.data.data()), im.step);
+    if (missing)
+      rgb->emplace_back();
+    else
+      rgb->emplace_back(im.height, im.width, CV_8UC3, const_cast<uint8_t*>(im.data.data()), im.step);
+  }
+  if (missing_views == n) {
+    *why = "no camera delivered an image";
+    return false;
   }
   return true;
 }

@@ -6,6 +6,7 @@
 // every key documented there) read strictly, then any private parameter named like a key
 // overrides it; an unknown one stops the stage (tabletop_common/ros/config_overrides.h).
 // Live tuning (dynamic_reconfigure, cfg/FrameSynchronizerTuning.cfg): tolerance, timeout.
+#include <cmath>
 #include <deque>
 #include <memory>
 #include <mutex>
@@ -50,6 +51,10 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     bool have_pose = false;
     std::string pose_frame;   // the optical frame the pose is of
     ros::WallTime pose_time;  // when the pose was last looked up
+    // Its last complete calibration (camera_info with a pose for its frame): fills its slot in
+    // a set it is missing from.
+    sensor_msgs::CameraInfoConstPtr published_info;
+    geometry_msgs::Transform published_pose;
     uint64_t images = 0, rejected = 0;
     double last_stamp = -1e300;  // of its last image (time-jump detection)
     bool before_jump = false;    // no image from after the last time jump yet
@@ -106,9 +111,10 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       onTick();
     };
     tick_ = nh.createWallTimer(ros::WallDuration(0.05), on_tick);
-    NODELET_INFO("frame synchroniser: %d cameras (%s0..%s%d), tolerance %.4f s, timeout %.3f s",
+    NODELET_INFO("frame synchroniser: %d cameras (%s0..%s%d), tolerance %.4f s, timeout %.3f s, "
+                 "sets published without up to %d camera(s)",
                  num_cameras, prefix.c_str(), prefix.c_str(), num_cameras - 1, timing.tolerance,
-                 timing.timeout);
+                 timing.timeout, timing.max_missing);
     tabletop_capture::FrameSynchronizerTuningConfig live;
     live.tolerance = timing.tolerance;
     live.timeout = timing.timeout;
@@ -186,7 +192,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
                               "dropped", name.c_str(), msg->header.stamp.toSec());
         return;
       }
-      const std::vector<uint64_t> missing_before = assembler_->counters().missing_per_camera;
+      const Losses missing_before = losses();
       const AddResult r = assembler_->add(i, msg->header.stamp.toSec(), rgb);
       newest_arrival_ = ros::WallTime::now();
       newest_stamp_ = std::max(newest_stamp_, msg->header.stamp.toSec());
@@ -230,15 +236,29 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     return true;
   }
 
-  // Called with mutex_ held: names the cameras whose images were missing in dropped sets.
-  void warnDropped(const std::vector<uint64_t>& before) {
-    const auto& after = assembler_->counters().missing_per_camera;
+  // What warnDropped compares: the counters before an add() or expire().
+  struct Losses {
+    std::vector<uint64_t> missing;
+    uint64_t dropped = 0;
+  };
+  Losses losses() const {
+    return {assembler_->counters().missing_per_camera, assembler_->counters().incomplete()};
+  }
+
+  // Called with mutex_ held: names the cameras missing from the sets just dropped or published
+  // without them.
+  void warnDropped(const Losses& before) {
+    const Losses after = losses();
     std::string names;
-    for (size_t c = 0; c < after.size(); ++c)
-      if (after[c] > before[c]) names += (names.empty() ? "" : ", ") + cameras_[c].name;
-    if (!names.empty())
+    for (size_t c = 0; c < after.missing.size(); ++c)
+      if (after.missing[c] > before.missing[c]) names += (names.empty() ? "" : ", ") + cameras_[c].name;
+    if (names.empty()) return;
+    if (after.dropped > before.dropped)
       NODELET_WARN_THROTTLE(5.0, "frame synchroniser: incomplete frame set dropped, missing: %s",
                             names.c_str());
+    else
+      NODELET_WARN_THROTTLE(5.0, "frame synchroniser: frame set published without %s (no image "
+                            "within the timeout): those views are left out", names.c_str());
   }
 
   void reject(int i, const std::string& why) {
@@ -249,9 +269,22 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   }
 
   void onTick() {
+    // A camera whose images stopped (or never came) still needs a pose for its empty slot in
+    // degraded sets: look it up here, outside the lock (a lookup may wait tf_timeout).
+    std::vector<std::pair<int, std::string>> unposed;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (size_t i = 0; i < cameras_.size(); ++i) {
+        const Camera& c = cameras_[i];
+        if (c.info && !(c.have_pose && c.pose_frame == c.info->header.frame_id) &&
+            (ros::WallTime::now() - c.pose_time).toSec() >= 1.0)
+          unposed.emplace_back(static_cast<int>(i), c.info->header.frame_id);
+      }
+    }
+    for (const auto& u : unposed) refreshPose(u.first, u.second);
     std::lock_guard<std::mutex> lock(mutex_);
     if (!assembler_ || newest_arrival_.isZero()) return;
-    const std::vector<uint64_t> missing_before = assembler_->counters().missing_per_camera;
+    const Losses missing_before = losses();
     // Stamps may come from a camera clock: advance the newest stamp by the wall time since it
     // arrived instead of comparing stamps with the system clock.
     assembler_->expire(newest_stamp_ + (ros::WallTime::now() - newest_arrival_).toSec());
@@ -285,35 +318,61 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     hold_until_subscribers_ = 0;  // only at start-up: later, a live pipeline must not stall
   }
 
-  // Called with mutex_ held. Copies each image once, into the bundle.
+  // Called with mutex_ held. Copies each image once, into the bundle. A camera missing from
+  // the set, or whose image has no pose (refreshPose() said why), gets an empty slot
+  // (MultiViewFrame.msg) with its current calibration or, lacking one (no tf for the frame its
+  // images name now), that of its last published image; the set is dropped if that leaves more
+  // than max_missing slots empty or a slot without any calibration.
   void publishSet(FrameSet<ImagePtr>& set) {
     const ros::WallTime t0 = ros::WallTime::now();
+    const size_t n = cameras_.size();
+    std::vector<bool> usable(n);
+    int empty_slots = 0;
+    for (size_t i = 0; i < n; ++i) {
+      Camera& c = cameras_[i];
+      const bool calibrated = c.info && c.have_pose && c.pose_frame == c.info->header.frame_id;
+      if (calibrated) {
+        c.published_info = c.info;
+        c.published_pose = toTransform(c.pose);
+      }
+      usable[i] = set.present[i] && calibrated;
+      if (usable[i]) continue;
+      ++empty_slots;
+      if (!c.published_info || empty_slots > assembler_->config().max_missing) {
+        ++tf_failures_;
+        return;
+      }
+    }
     tabletop_msgs::MultiViewFramePtr out(new tabletop_msgs::MultiViewFrame);
     // The earliest image stamp, taken from the messages (set.stamp is a double: it would
     // lose nanoseconds).
-    out->header.stamp = set.frames[0]->header.stamp;
-    for (const auto& f : set.frames) out->header.stamp = std::min(out->header.stamp, f->header.stamp);
+    bool first = true;
+    for (size_t i = 0; i < n; ++i)
+      if (usable[i] && (first || set.frames[i]->header.stamp < out->header.stamp)) {
+        out->header.stamp = set.frames[i]->header.stamp;
+        first = false;
+      }
     out->header.frame_id = world_frame_;
-    const size_t n = cameras_.size();
     out->camera_names.resize(n);
     out->images.resize(n);
     out->camera_infos.resize(n);
     out->camera_poses.resize(n);
     for (size_t i = 0; i < n; ++i) {
       Camera& c = cameras_[i];
-      const sensor_msgs::CameraInfoConstPtr& info = c.info;
-      // refreshPose() said why (throttled) when it found no pose.
-      if (!info || !c.have_pose || c.pose_frame != info->header.frame_id) {
-        ++tf_failures_;
-        return;
-      }
       out->camera_names[i] = c.name;
-      out->images[i] = *set.frames[i];  // the one copy: into the bundle
-      out->images[i].encoding = "rgb8";
-      out->camera_infos[i] = *info;
-      out->camera_infos[i].header.stamp = set.frames[i]->header.stamp;
-      out->camera_poses[i] = toTransform(c.pose);
+      sensor_msgs::Image& image = out->images[i];
+      if (usable[i]) {
+        image = *set.frames[i];  // the one copy: into the bundle
+      } else {
+        image.header.stamp = out->header.stamp;
+        image.header.frame_id = c.published_info->header.frame_id;
+      }
+      image.encoding = "rgb8";
+      out->camera_infos[i] = *c.published_info;
+      out->camera_infos[i].header.stamp = image.header.stamp;
+      out->camera_poses[i] = c.published_pose;
     }
+    if (empty_slots > 0) ++partial_;
     notePublishedFrame(out.get());
     emit(out);
     bundle_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
@@ -345,13 +404,26 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     // the next image (the static tf may simply not have arrived yet).
     c.pose_time = now;
     if (error.empty()) {
+      if (c.have_pose && c.pose_frame == frame_id) {
+        const double moved_mm = (pose.translation() - c.pose.translation()).norm() * 1e3;
+        const double turned_deg =
+            Eigen::AngleAxisd(pose.linear() * c.pose.linear().transpose()).angle() * 180.0 / M_PI;
+        if (moved_mm > 1.0 || turned_deg > 0.1)
+          NODELET_WARN("frame synchroniser: %s: its tf changed (%.1f mm, %.2f deg): the new pose is "
+                       "used from now on", c.name.c_str(), moved_mm, turned_deg);
+      }
       c.pose = pose;
       c.pose_frame = frame_id;
       c.have_pose = true;
     } else if (!c.have_pose || c.pose_frame != frame_id) {
       c.have_pose = false;
-      NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no tf %s -> %s (%s): its sets are dropped",
-                             c.name.c_str(), world_frame_.c_str(), frame_id.c_str(), error.c_str());
+      NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no tf %s -> %s (%s): its images are "
+                             "left out of the sets (or the sets dropped)", c.name.c_str(),
+                             world_frame_.c_str(), frame_id.c_str(), error.c_str());
+    } else {
+      NODELET_WARN_THROTTLE(5.0, "frame synchroniser: %s: tf %s -> %s lost (%s): keeping its last "
+                            "pose (a static rig)", c.name.c_str(), world_frame_.c_str(),
+                            frame_id.c_str(), error.c_str());
     }
   }
 
@@ -381,14 +453,18 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "images arrive but no complete set");
     else if (problems > problems_at_last_diag_)
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "dropping frame sets");
+    else if (partial_ > partial_at_last_diag_)
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "publishing frame sets without some cameras");
     else
       stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "ok");
     last_diag_ = now;
     published_at_last_diag_ = published_;
     problems_at_last_diag_ = problems;
+    partial_at_last_diag_ = partial_;
     stat.add("rate (Hz)", rate);
     stat.add("sets published", published_);
     stat.add("sets incomplete (dropped)", k.incomplete());
+    stat.add("sets without some cameras (published)", partial_);
     stat.add("late images (dropped)", k.late);
     stat.add("duplicate images (dropped)", k.duplicate);
     stat.add("sets without tf (dropped)", tf_failures_);
@@ -401,7 +477,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     for (size_t c = 0; c < cameras_.size(); ++c) {
       std::ostringstream v;
       v << cameras_[c].images << " received, " << cameras_[c].rejected << " rejected, "
-        << k.missing_per_camera[c] << " sets missed";
+        << k.missing_per_camera[c] << " sets missed" << (assembler_->absent(c) ? ", absent" : "");
       stat.add(cameras_[c].name, v.str());
     }
   }
@@ -428,7 +504,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
   double jump_stamp_ = 0;  // the first stamp after the last jump
   tabletop_common::RunningStats convert_ms_, bundle_ms_;
   uint64_t published_ = 0, published_at_last_diag_ = 0, problems_at_last_diag_ = 0,
-           tf_failures_ = 0;
+           tf_failures_ = 0, partial_ = 0, partial_at_last_diag_ = 0;
   // Last: destroyed first, so that no tuning callback meets a half-destroyed nodelet.
   std::unique_ptr<tabletop_common::LiveTuning<tabletop_capture::FrameSynchronizerTuningConfig>> tuning_;
 };

@@ -641,7 +641,10 @@ class DemoMonitor {
     if (bp != scored_body_.end()) body = bp->second;
     for (size_t i = 0; i < n; ++i) {
       const auto& im = f.images[i];
-      if (im.encoding != "rgb8" || im.data.size() < size_t(im.step) * im.height) continue;
+      // (A camera missing from a degraded set has an empty image: its cell stays grey.)
+      if (im.encoding != "rgb8" || im.width == 0 || im.height == 0 ||
+          im.data.size() < size_t(im.step) * im.height)
+        continue;
       cv::Mat rgb(im.height, im.width, CV_8UC3, const_cast<uint8_t*>(im.data.data()), im.step);
       cv::Mat cell = sheet(cv::Rect((i % cols) * cell_w, (i / cols) * cell_h, im.width, im.height));
       cv::cvtColor(rgb, cell, cv::COLOR_RGB2BGR);

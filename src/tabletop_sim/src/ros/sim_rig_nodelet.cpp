@@ -10,6 +10,7 @@
 // rate) instead of starving it of CPU and making it drop sets. Before the first frame it waits
 // for the ack topic's publisher, so the first (background-learning) sets are not missed. An ack
 // that does not come within ~lockstep_timeout seconds is counted and waited for no longer.
+#include <array>
 #include <atomic>
 #include <limits>
 #include <condition_variable>
@@ -115,7 +116,6 @@ class SimRigNodelet : public nodelet::Nodelet {
     }
     encoding_ = (o.bayer == "none") ? "rgb8" : o.bayer;
     const tabletop_capture::RigDescription& rig = sim_->rig();
-    std::vector<geometry_msgs::TransformStamped> tfs;
     for (const tabletop_capture::CameraModel& cam : rig.cameras) {
       image_pubs_.push_back(nh.advertise<sensor_msgs::Image>(cam.name + "/image_raw", 4));
       info_pubs_.push_back(nh.advertise<sensor_msgs::CameraInfo>(cam.name + "/camera_info", 4));
@@ -125,9 +125,10 @@ class SimRigNodelet : public nodelet::Nodelet {
       t.header.frame_id = rig.world_frame;
       t.child_frame_id = cam.frame_id;
       t.transform = tabletop_capture::toTransform(cam.world_T_camera);
-      tfs.push_back(t);
+      tfs_.push_back(t);
     }
-    static_tf_.sendTransform(tfs);
+    static_tf_.sendTransform(tfs_);
+    tf_shift_.assign(tfs_.size(), {0.0, 0.0, 0.0});
     targets_pub_ = nh.advertise<tabletop_msgs::TrackedTargets>("ground_truth/targets", 10);
     body_pub_ = nh.advertise<tabletop_msgs::BodyPose>("ground_truth/body_pose", 10);
     if (truth_every_ > 0) {
@@ -226,7 +227,12 @@ class SimRigNodelet : public nodelet::Nodelet {
         break;
       }
       if (lockstep_ > 0) waitForPipeline(frame);
-      const ros::Time stamp = ros::Time::now();
+      double clock_offset = 0;
+      {
+        std::lock_guard<std::mutex> lock(fault_mutex_);
+        clock_offset = faults_->clockOffset(ros::WallTime::now().toSec());
+      }
+      const ros::Time stamp = ros::Time::now() + ros::Duration(clock_offset);
       if (lockstep_ > 0 && ack_sub_.getNumPublishers() > 0) {
         std::lock_guard<std::mutex> lock(ack_mutex_);
         in_flight_.insert(stamp);
@@ -264,6 +270,7 @@ class SimRigNodelet : public nodelet::Nodelet {
         std::lock_guard<std::mutex> lock(fault_mutex_);
         fault = faults_->effect(static_cast<int>(i), now);
       }
+      updateTf(i, fault);
       if (fault.drop) continue;
       cv::Mat image = f.images[i];
       std::string encoding = encoding_;
@@ -271,12 +278,13 @@ class SimRigNodelet : public nodelet::Nodelet {
       sensor_msgs::ImagePtr img(new sensor_msgs::Image);
       tabletop_capture::toImageMsg(image, encoding, img.get());
       img->header.stamp = stamp;
-      img->header.frame_id = infos_[i].header.frame_id;
+      img->header.frame_id = fault.frame_id.empty() ? infos_[i].header.frame_id : fault.frame_id;
       img->header.seq = f.index;
       sensor_msgs::CameraInfoPtr info(new sensor_msgs::CameraInfo(infos_[i]));
       info->header.stamp = stamp;
       info->header.seq = f.index;
       if (fault.nan_info) info->K[0] = info->K[4] = std::numeric_limits<double>::quiet_NaN();
+      info->header.frame_id = img->header.frame_id;
       info_pubs_[i].publish(info);
       image_pubs_[i].publish(img);
     }
@@ -291,6 +299,19 @@ class SimRigNodelet : public nodelet::Nodelet {
       truth_body_pub_.publish(body);
       truth_skin_pub_.publish(skin);
     }
+  }
+
+  // A tf fault: camera i's static tf re-broadcast shifted, or true again once it ends.
+  void updateTf(size_t i, const CameraFaultEffect& fault) {
+    const std::array<double, 3> shift{fault.tf_shift[0], fault.tf_shift[1], fault.tf_shift[2]};
+    if (shift == tf_shift_[i]) return;
+    geometry_msgs::TransformStamped t = tfs_[i];
+    t.header.stamp = ros::Time::now();
+    t.transform.translation.x += shift[0];
+    t.transform.translation.y += shift[1];
+    t.transform.translation.z += shift[2];
+    static_tf_.sendTransform(t);  // replaces the camera's entry in /tf_static
+    tf_shift_[i] = shift;
   }
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -335,6 +356,8 @@ class SimRigNodelet : public nodelet::Nodelet {
   int truth_every_ = 0;
   Eigen::Vector3i truth_dims_{64, 64, 48};
   tf2_ros::StaticTransformBroadcaster static_tf_;
+  std::vector<geometry_msgs::TransformStamped> tfs_;  // the rig's true camera poses
+  std::vector<std::array<double, 3>> tf_shift_;       // the shift broadcast per camera (m)
   std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
   std::string encoding_, world_frame_;
   int max_frames_ = 0;

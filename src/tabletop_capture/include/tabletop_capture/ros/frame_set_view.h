@@ -14,7 +14,9 @@
 namespace tabletop_capture {
 
 // False, with the reason (naming the camera), for an inconsistent bundle (array sizes), an image
-// that is not a complete rgb8 buffer, an invalid camera_info or a non-finite / non-unit pose.
+// that is not a complete rgb8 buffer, an invalid camera_info or a non-finite / non-unit pose, or
+// a set with no image at all. A camera missing from a degraded set (empty image,
+// MultiViewFrame.msg) gets an empty Mat and its camera model.
 // The Mats point into `frame`'s buffers: they are valid, read-only, while the message lives.
 bool unpackFrameSet(const tabletop_msgs::MultiViewFrame& frame, std::vector<cv::Mat>* rgb,
                     std::vector<CameraModel>* cameras, std::string* why);
