@@ -200,8 +200,8 @@ def main():
                               "sets, its slot empty), then with it again",
               lambda: rig(f"stop {c} {d}"), "timed", reports=f"published without cam{c}",
               carries_on=True),
-        Fault("encoding_switch", f"camera {c} sends bgr8 for {d:g} s: its images are rejected with a "
-                                 "throttled error, the others go on",
+        Fault("encoding_switch", f"camera {c} sends bgr8 for {d:g} s: a supported encoding, converted "
+                                 "to rgb8, nothing lost",
               lambda: rig(f"encoding {c} bgr8 {d}"), "timed", carries_on=True),
         Fault("size_switch", f"camera {c} sends 160x120 for {d:g} s: refused as a size mismatch, "
                              "the sets go on without it",

@@ -12,6 +12,7 @@ FrameSetAssemblerConfig FrameSynchronizerConfig::assembler() const {
   };
   if (num_cameras < 1 || num_cameras > 64) fail("num_cameras", "must lie in [1, 64]");
   if (camera_prefix.empty()) fail("camera_prefix", "must not be empty");
+  if (image_transport.empty()) fail("image_transport", "must not be empty (raw, compressed, ...)");
   if (!(tolerance >= 0.0 && std::isfinite(tolerance))) fail("tolerance", "must be finite and >= 0");
   if (!(timeout > 0.0)) fail("timeout", "must be > 0");
   if (max_pending < 1) fail("max_pending", "must be >= 1");
@@ -38,6 +39,7 @@ FrameSetAssemblerConfig FrameSynchronizerConfig::assembler() const {
 void addFrameSynchronizerKeys(FrameSynchronizerConfig* c, tabletop_common::ConfigSchema* s) {
   s->add("num_cameras", &c->num_cameras)
       .add("camera_prefix", &c->camera_prefix)
+      .add("image_transport", &c->image_transport)
       .add("tolerance", &c->tolerance)
       .add("timeout", &c->timeout)
       .add("max_pending", &c->max_pending)

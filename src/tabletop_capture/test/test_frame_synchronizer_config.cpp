@@ -24,6 +24,7 @@ TEST(FrameSynchronizerConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_TRUE(tabletop_common::config_test::keysMissingFrom(schema, path).empty());
   EXPECT_EQ(c.num_cameras, d.num_cameras);
   EXPECT_EQ(c.camera_prefix, d.camera_prefix);
+  EXPECT_EQ(c.image_transport, d.image_transport);
   EXPECT_EQ(c.tolerance, d.tolerance);
   EXPECT_EQ(c.timeout, d.timeout);
   EXPECT_EQ(c.max_pending, d.max_pending);

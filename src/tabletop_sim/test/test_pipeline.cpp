@@ -454,6 +454,78 @@ TEST_F(PipelineTest, SynchroniserPublishesSetsWithoutASilentCamera) {
   EXPECT_DOUBLE_EQ(out.frames.back()->header.stamp.toSec(), 24.0);
 }
 
+// Images come through image_transport: cam0 on its default topic (raw), cam1 remapped to a
+// topic in another namespace (a camera driver that publishes elsewhere). A transport whose
+// plugin is not installed stops the stage with a clear reason instead of a crash.
+TEST_F(PipelineTest, SynchroniserTakesImagesThroughImageTransport) {
+  ros::NodeHandle nh;
+  ros::param::set("/it/frame_synchronizer/num_cameras", 2);
+  ros::param::set("/it/frame_synchronizer/image_transport", "raw");
+  FrameLog out;
+  boost::function<void(const tabletop_msgs::MultiViewFrame::ConstPtr&)> on_frame =
+      [&](const tabletop_msgs::MultiViewFrame::ConstPtr& m) { out.add(m); };
+  ros::Subscriber sub = nh.subscribe<tabletop_msgs::MultiViewFrame>("/it/frames", 50, on_frame);
+  nodelet::M_string remap{{"/it/cam1/image_raw", "/elsewhere/camera/image"}};
+  ASSERT_TRUE(tabletop_common::test_support::loadNodelet("/it/frame_synchronizer",
+                                                         "tabletop_capture/FrameSynchronizer", remap));
+  RigDescription rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{2, 32, 24, false});
+  tf2_ros::StaticTransformBroadcaster static_tf;
+  std::vector<geometry_msgs::TransformStamped> tfs;
+  for (auto& cam : rig.cameras) {
+    cam.frame_id = "it_" + cam.frame_id;
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time::now();
+    t.header.frame_id = "world";
+    t.child_frame_id = cam.frame_id;
+    t.transform = toTransform(cam.world_T_camera);
+    tfs.push_back(t);
+  }
+  static_tf.sendTransform(tfs);
+  ros::Publisher img_pub[2] = {nh.advertise<sensor_msgs::Image>("/it/cam0/image_raw", 10),
+                               nh.advertise<sensor_msgs::Image>("/elsewhere/camera/image", 10)};
+  ros::Publisher info_pub[2];
+  for (int i = 0; i < 2; ++i) {
+    info_pub[i] = nh.advertise<sensor_msgs::CameraInfo>("/it/cam" + std::to_string(i) + "/camera_info", 5, true);
+    info_pub[i].publish(toCameraInfo(rig.cameras[i]));
+  }
+  ASSERT_TRUE(waitFor([&] { return img_pub[0].getNumSubscribers() && img_pub[1].getNumSubscribers(); }, 10.0))
+      << "the synchroniser did not subscribe to the raw and the remapped topic";
+  ros::WallDuration(0.3).sleep();
+  for (int k = 0; k < 3; ++k) {
+    for (int c = 0; c < 2; ++c) {
+      sensor_msgs::ImagePtr m(new sensor_msgs::Image);
+      m->header.stamp = ros::Time(30.0 + 0.04 * k);
+      m->header.frame_id = rig.cameras[c].frame_id;
+      m->encoding = "rgb8";
+      m->width = 32;
+      m->height = 24;
+      m->step = 96;
+      m->data.assign(96 * 24, static_cast<uint8_t>(50 + c));
+      img_pub[c].publish(m);
+    }
+    ros::WallDuration(0.04).sleep();
+  }
+  ASSERT_TRUE(waitFor([&] { return out.size() >= 3; }, 5.0)) << out.size() << " sets";
+  {
+    std::lock_guard<std::mutex> lock(out.mutex);
+    for (const auto& f : out.frames) {
+      ASSERT_EQ(f->images.size(), 2u);
+      EXPECT_EQ(f->images[0].data.at(0), 50);
+      EXPECT_EQ(f->images[1].data.at(0), 51);  // from the remapped topic
+    }
+  }
+
+  // A transport without a plugin: not started, said on /diagnostics, nothing crashed.
+  ros::param::set("/it_missing/frame_synchronizer/num_cameras", 2);
+  ros::param::set("/it_missing/frame_synchronizer/image_transport", "no_such_transport");
+  tabletop_common::test_support::DiagnosticsValues diag("it_missing/frame_synchronizer");
+  ASSERT_TRUE(load("/it_missing/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
+  ASSERT_TRUE(waitFor([&] { return diag.message().find("not started") != std::string::npos; }, 5.0))
+      << diag.message();
+  EXPECT_NE(diag.message().find("image_transport 'no_such_transport' is not available"), std::string::npos)
+      << diag.message();
+}
+
 // The rig publisher turns the committed rig YAML into latched camera_info and static tf.
 TEST_F(PipelineTest, RigPublisherPublishesCameraInfoAndTf) {
   ros::NodeHandle nh;

@@ -13,6 +13,7 @@ namespace tabletop_capture {
 struct FrameSynchronizerConfig {
   int num_cameras = 8;
   std::string camera_prefix = "cam";
+  std::string image_transport = "raw";  // image_transport plugin the images come through
   double tolerance = 0.0;  // s; 0 = hardware sync (identical stamps)
   double timeout = 0.2;    // s
   int max_pending = 10;

@@ -1,5 +1,6 @@
-// Frame synchroniser nodelet: bundles the N camera streams (cam<i>/image_raw + camera_info)
-// into synchronised MultiViewFrame sets on `frames`, converting every image to rgb8.
+// Frame synchroniser nodelet: bundles the N camera streams (cam<i>/image_raw, received through
+// image_transport, + camera_info) into synchronised MultiViewFrame sets on `frames`, converting
+// every image to rgb8.
 // Grouping, ordering and drop policy live in FrameSetAssembler (ROS-free, unit-tested);
 // image validation and debayering in convertToRgb8.
 // Parameters: ~config_file (default $(find tabletop_capture)/config/frame_synchronizer.yaml,
@@ -15,6 +16,7 @@
 
 #include <boost/function.hpp>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/package.h>
@@ -44,7 +46,8 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
 
   struct Camera {
     std::string name;
-    ros::Subscriber image_sub, info_sub;
+    image_transport::Subscriber image_sub;
+    ros::Subscriber info_sub;
     sensor_msgs::CameraInfoConstPtr info;  // latest valid camera_info
     std::string info_error;                // why the latest camera_info was rejected
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -78,7 +81,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     } catch (const std::exception& e) {
       {
         std::lock_guard<std::mutex> lock(mutex_);
-        fatal_ = e.what();
+        fatal_ = std::string("bad parameters: ") + e.what();
       }
       NODELET_FATAL("frame synchroniser: not started: bad parameters: %s", e.what());
       return;
@@ -93,6 +96,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     const int queue_size = cfg.queue_size, image_queue_size = cfg.image_queue_size;
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh);
     cameras_.resize(num_cameras);
+    image_transport::ImageTransport it(nh);
     for (int i = 0; i < num_cameras; ++i) {
       Camera& c = cameras_[i];
       c.name = prefix + std::to_string(i);
@@ -101,8 +105,17 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       };
       boost::function<void(const sensor_msgs::CameraInfoConstPtr&)> on_info =
           [this, i](const sensor_msgs::CameraInfoConstPtr& m) { onInfo(i, m); };
-      c.image_sub = nh.subscribe<sensor_msgs::Image>(c.name + "/image_raw",
-                                                     std::max(1, image_queue_size), on_image);
+      try {
+        c.image_sub = it.subscribe(c.name + "/image_raw", std::max(1, image_queue_size), on_image,
+                                   ros::VoidPtr(), image_transport::TransportHints(cfg.image_transport));
+      } catch (const image_transport::TransportLoadException& e) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        fatal_ = "image_transport '" + cfg.image_transport + "' is not available (" + e.what() + ")";
+        assembler_.reset();
+        cameras_.clear();
+        NODELET_FATAL("frame synchroniser: not started: %s", fatal_.c_str());
+        return;
+      }
       c.info_sub = nh.subscribe<sensor_msgs::CameraInfo>(c.name + "/camera_info",
                                                          std::max(1, image_queue_size), on_info);
     }
@@ -111,10 +124,10 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       onTick();
     };
     tick_ = nh.createWallTimer(ros::WallDuration(0.05), on_tick);
-    NODELET_INFO("frame synchroniser: %d cameras (%s0..%s%d), tolerance %.4f s, timeout %.3f s, "
-                 "sets published without up to %d camera(s)",
-                 num_cameras, prefix.c_str(), prefix.c_str(), num_cameras - 1, timing.tolerance,
-                 timing.timeout, timing.max_missing);
+    NODELET_INFO("frame synchroniser: %d cameras (%s0..%s%d, %s transport), tolerance %.4f s, "
+                 "timeout %.3f s, sets published without up to %d camera(s)",
+                 num_cameras, prefix.c_str(), prefix.c_str(), num_cameras - 1,
+                 cfg.image_transport.c_str(), timing.tolerance, timing.timeout, timing.max_missing);
     tabletop_capture::FrameSynchronizerTuningConfig live;
     live.tolerance = timing.tolerance;
     live.timeout = timing.timeout;
@@ -171,8 +184,9 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     ImagePtr rgb = msg;
     if (msg->encoding != "rgb8" || msg->width != info->width || msg->height != info->height ||
         msg->step < msg->width * 3 || msg->data.size() < size_t(msg->step) * msg->height) {
+      // (No source name: reject() puts the camera's name in front.)
       ImageConversionResult r =
-          convertToRgb8(view, static_cast<int>(info->width), static_cast<int>(info->height), name);
+          convertToRgb8(view, static_cast<int>(info->width), static_cast<int>(info->height), "");
       if (!r.ok) {
         reject(i, r.error);
         return;
@@ -433,7 +447,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       if (fatal_.empty())
         stat.summary(diagnostic_msgs::DiagnosticStatus::OK, "starting");
       else
-        stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: bad parameters: " + fatal_);
+        stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "not started: " + fatal_);
       return;
     }
     const ros::WallTime now = ros::WallTime::now();

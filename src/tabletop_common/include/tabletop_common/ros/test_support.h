@@ -32,8 +32,9 @@ inline nodelet::Loader& loader() {
 }
 
 // Loads a nodelet into loader() with no remappings or arguments.
-inline bool loadNodelet(const std::string& name, const std::string& type) {
-  return loader().load(name, type, nodelet::M_string(), nodelet::V_string());
+inline bool loadNodelet(const std::string& name, const std::string& type,
+                        const nodelet::M_string& remappings = nodelet::M_string()) {
+  return loader().load(name, type, remappings, nodelet::V_string());
 }
 
 // The latest key/value pairs (and summary message) of the /diagnostics status whose name
