@@ -70,6 +70,7 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
       .add("nodelet/shed_drop_fraction", &c->nodelet.shed_drop_fraction)
       .add("nodelet/foreground_mask_topics", &c->nodelet.foreground_mask_topics)
       .add("nodelet/foreground_mask_topic", &c->nodelet.foreground_mask_topic)
+      .add("nodelet/foreground_mask_transport", &c->nodelet.foreground_mask_transport)
       .add("nodelet/foreground_mask_max_age", &c->nodelet.foreground_mask_max_age)
       .add("nodelet/background_load_dir", &c->nodelet.background_load_dir)
       .add("nodelet/background_save_dir", &c->nodelet.background_save_dir)
@@ -100,6 +101,8 @@ void finishReconstructorConfig(const std::string& path, ReconstructorConfig* cfg
     throw std::runtime_error(where + "nodelet/foreground_mask_max_age: must be >= 0");
   if (c.nodelet.foreground_mask_topic.empty())
     throw std::runtime_error(where + "nodelet/foreground_mask_topic: must not be empty");
+  if (c.nodelet.foreground_mask_transport.empty())
+    throw std::runtime_error(where + "nodelet/foreground_mask_transport: must not be empty");
   if (c.nodelet.max_hand_rois < 0 || c.nodelet.max_hand_rois > 8)
     throw std::runtime_error(where + "hand_volumes/max_hands: must lie in [0, 8]");
   if (c.nodelet.queue_size < 1) throw std::runtime_error(where + "nodelet/queue_size: must be >= 1");

@@ -429,6 +429,7 @@ TEST(ReconstructorConfig, ShippedFileMatchesTheDefaults) {
   EXPECT_EQ(c.nodelet.shed_drop_fraction, n.shed_drop_fraction);
   EXPECT_EQ(c.nodelet.foreground_mask_topics, n.foreground_mask_topics);
   EXPECT_EQ(c.nodelet.foreground_mask_topic, n.foreground_mask_topic);
+  EXPECT_EQ(c.nodelet.foreground_mask_transport, n.foreground_mask_transport);
   EXPECT_EQ(c.nodelet.foreground_mask_max_age, n.foreground_mask_max_age);
   EXPECT_EQ(c.nodelet.background_load_dir, n.background_load_dir);
   EXPECT_EQ(c.nodelet.background_save_dir, n.background_save_dir);

@@ -27,6 +27,7 @@ struct NodeletOptions {
   // default: nothing waits for the masks, so offline runs would depend on timing.
   bool foreground_mask_topics = false;
   std::string foreground_mask_topic = "body_mask";
+  std::string foreground_mask_transport = "raw";  // image_transport plugin
   double foreground_mask_max_age = 0.2;  // s
   // Frame sets waiting in the stage's gate (tabletop_common/pipeline_gate.h): beyond it the
   // oldest waiting set is dropped (the pipeline's one drop point). Live: 2 (a source in

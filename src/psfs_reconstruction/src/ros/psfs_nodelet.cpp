@@ -47,6 +47,7 @@
 
 #include <boost/make_shared.hpp>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/package.h>
@@ -397,8 +398,19 @@ class PsfsNodelet : public nodelet::Nodelet {
       for (size_t i = 0; i < f.camera_names.size(); ++i) {
         boost::function<void(const sensor_msgs::Image::ConstPtr&)> cb =
             [this, i](const sensor_msgs::Image::ConstPtr& m) { onMask(i, m); };
-        mask_subs_.push_back(getNodeHandle().subscribe<sensor_msgs::Image>(
-            f.camera_names[i] + "/" + cfg_.nodelet.foreground_mask_topic, 2, cb));
+        try {
+          image_transport::ImageTransport it(getNodeHandle());
+          mask_subs_.push_back(it.subscribe(f.camera_names[i] + "/" + cfg_.nodelet.foreground_mask_topic, 2,
+                                            cb, ros::VoidPtr(),
+                                            image_transport::TransportHints(cfg_.nodelet.foreground_mask_transport)));
+        } catch (const image_transport::TransportLoadException& e) {
+          NODELET_ERROR("psfs: foreground masks off: image_transport '%s' is not available (%s)",
+                        cfg_.nodelet.foreground_mask_transport.c_str(), e.what());
+          cfg_.nodelet.foreground_mask_topics = false;
+          mask_subs_.clear();
+          masks_.clear();
+          return out;
+        }
       }
     }
     out.resize(masks_.size());
@@ -675,7 +687,7 @@ class PsfsNodelet : public nodelet::Nodelet {
 
   std::string world_frame_, fatal_;
   ros::Subscriber frames_sub_, roi_sub_;
-  std::vector<ros::Subscriber> mask_subs_;
+  std::vector<image_transport::Subscriber> mask_subs_;
   ros::Publisher body_pub_, skin_pub_, hands_pub_, body_cloud_pub_, skin_cloud_pub_;
   std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
 

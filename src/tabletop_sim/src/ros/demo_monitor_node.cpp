@@ -26,6 +26,7 @@
 //                  compare two runs of one bag; when the bag is played again within one run
 //                  (psfs/processed stamps go back), each further pass goes to
 //                  digests_play<k>.txt (k = 2, 3, ...)                                 [false]
+//   ~image_transport  plugin the body tracker's silhouettes (cam<i>/body_mask) come through [raw]
 //
 // The summary also follows a frame set through the stages (sets in and out of each, from
 // their /diagnostics counters), the one place that drops them (pSfS), load shedding, and which
@@ -44,6 +45,7 @@
 
 #include <boost/crc.hpp>
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <image_transport/image_transport.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <ros/ros.h>
@@ -148,7 +150,14 @@ class DemoMonitor {
       for (size_t i = 0; i < msg->camera_names.size(); ++i) {
         boost::function<void(const sensor_msgs::Image::ConstPtr&)> cb =
             [this, i](const sensor_msgs::Image::ConstPtr& m) { onBodyMask(i, m); };
-        mask_subs_.push_back(nh_.subscribe<sensor_msgs::Image>(msg->camera_names[i] + "/body_mask", 5, cb));
+        // image_transport: ~image_transport (default raw) names the plugin.
+        image_transport::ImageTransport it(nh_);
+        try {
+          mask_subs_.push_back(it.subscribe(msg->camera_names[i] + "/body_mask", 5, cb, ros::VoidPtr(),
+                                            image_transport::TransportHints("raw", ros::TransportHints(), pnh_)));
+        } catch (const image_transport::TransportLoadException& e) {
+          ROS_ERROR_ONCE("demo monitor: no silhouette overlay: %s", e.what());
+        }
       }
     }
     // Keep the latest frame that shows the person (ground truth says a target is active) for
@@ -726,7 +735,7 @@ class DemoMonitor {
   ros::WallTimer subscribe_timer_;
   ros::Subscriber frames_sub_, truth_sub_, diag_sub_, tracked_sub_, hands_sub_, processed_sub_;
   ros::Subscriber body_sub_, body_truth_sub_;
-  std::vector<ros::Subscriber> mask_subs_;
+  std::vector<image_transport::Subscriber> mask_subs_;
   std::map<ros::Time, tabletop_msgs::BodyPose::ConstPtr> body_tracked_, body_truth_, scored_body_;
   std::map<size_t, std::map<ros::Time, sensor_msgs::Image::ConstPtr>> body_masks_;
   tabletop_common::RunningStats body_err_[4];  // head, hands, elbows, shoulders (mm)
