@@ -103,6 +103,14 @@ ReadResult FileFrameSource::read(CapturedFrame* frame, std::string* why) {
   // (OpenCV would log a warning for it at every pass).
   const bool at_end = frame_count_ > 0 && frames_since_open_ >= frame_count_;
   bool grabbed = !at_end && cap_.grab();
+  if (!grabbed && !at_end && frame_count_ > 0) {
+    // A file of a sequence whose length is known went missing: the camera vanished.
+    if (why)
+      *why = "file " + std::to_string(frames_since_open_ + 1) + " of " +
+             std::to_string(static_cast<long>(frame_count_)) +
+             " is missing or unreadable (moved away?)";
+    return ReadResult::kFailed;
+  }
   if (!grabbed && frames_since_open_ > 0) {
     // The end of the file (or the next file of the pattern is missing).
     if (!settings_.loop) return ReadResult::kEnd;

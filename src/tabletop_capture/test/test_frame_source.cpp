@@ -99,6 +99,7 @@ TEST(FrameSource, VanishedFilesFailAndComeBack) {
   ReadResult r = ReadResult::kFrame;
   for (int i = 0; i < 5 && r == ReadResult::kFrame; ++i) r = src->read(&f, &why);
   EXPECT_EQ(r, ReadResult::kFailed);
+  EXPECT_NE(why.find("file 2 of 3 is missing"), std::string::npos) << why;
   src->close();
   EXPECT_FALSE(src->open(&why));
   EXPECT_NE(why.find("no file matches"), std::string::npos) << why;
