@@ -248,6 +248,82 @@ TEST_F(CameraCaptureTest, BayerSequenceAtHalfResolutionThenVanishAndReturn) {
   tabletop_common::test_support::loader().clear();
 }
 
+// A rig that describes the full-size camera cannot calibrate half-resolution images: the
+// nodelet refuses to start, saying so on /diagnostics, and publishes nothing.
+TEST_F(CameraCaptureTest, HalfResolutionRefusesARigOfTheFullSize) {
+  CameraModel full = rigCamera();
+  full.name = "cam1";
+  full.frame_id = "cam1_optical_frame";
+  full.width = 640;
+  full.height = 480;
+  RigDescription rig;
+  rig.cameras.push_back(full);
+  saveRigYaml(rig, root_ + "/rig_full.yaml");
+  tabletop_common::test_support::DiagnosticsValues diag("cam1_capture");
+  ros::NodeHandle nh;
+  int images = 0;
+  boost::function<void(const sensor_msgs::ImageConstPtr&)> on_image = [&images](const sensor_msgs::ImageConstPtr&) {
+    ++images;
+  };
+  ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>("/tabletop/cam1/image_raw", 10, on_image);
+  const std::string ns = "/tabletop/cam1_capture/";
+  ros::param::set(ns + "device", "file:" + dir_ + "/img_%04d.png");
+  ros::param::set(ns + "camera_name", std::string("cam1"));
+  ros::param::set(ns + "rig_file", root_ + "/rig_full.yaml");
+  ros::param::set(ns + "bayer", std::string("rggb"));
+  ros::param::set(ns + "half_resolution", true);
+  ASSERT_TRUE(tabletop_common::test_support::loadNodelet("/tabletop/cam1_capture", "tabletop_capture/CameraCapture"));
+  ASSERT_TRUE(waitFor([&] { return diag.message().find("not started") != std::string::npos; }, 5.0))
+      << diag.message();
+  EXPECT_NE(diag.message().find("camera 'cam1' is calibrated for 640x480 but the nodelet publishes 320x240"),
+            std::string::npos) << diag.message();
+  ros::WallDuration(0.5).sleep();
+  EXPECT_EQ(images, 0);
+  EXPECT_EQ(sub.getNumPublishers(), 0u);
+  tabletop_common::test_support::loader().clear();
+}
+
+// Without a rig: images (the Bayer files read as they are, bayer: none) but no camera_info,
+// and a warning that says so.
+TEST_F(CameraCaptureTest, WithoutARigNoCameraInfoIsPublished) {
+  ros::NodeHandle nh;
+  std::mutex m;
+  std::vector<sensor_msgs::ImageConstPtr> images;
+  std::vector<std::string> warnings;
+  boost::function<void(const sensor_msgs::ImageConstPtr&)> on_image = [&](const sensor_msgs::ImageConstPtr& i) {
+    std::lock_guard<std::mutex> l(m);
+    images.push_back(i);
+  };
+  boost::function<void(const rosgraph_msgs::LogConstPtr&)> on_log = [&](const rosgraph_msgs::LogConstPtr& l) {
+    if (l->level != rosgraph_msgs::Log::WARN || l->msg.find("camera capture cam2") == std::string::npos) return;
+    std::lock_guard<std::mutex> g(m);
+    warnings.push_back(l->msg);
+  };
+  ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>("/tabletop/cam2/image_raw", 50, on_image);
+  ros::Subscriber info_sub = nh.subscribe<sensor_msgs::CameraInfo>("/tabletop/cam2/camera_info", 10,
+      boost::function<void(const sensor_msgs::CameraInfoConstPtr&)>([](const sensor_msgs::CameraInfoConstPtr&) {}));
+  ros::Subscriber log_sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 100, on_log);
+  const std::string ns = "/tabletop/cam2_capture/";
+  ros::param::set(ns + "device", "file:" + dir_ + "/img_%04d.png");
+  ros::param::set(ns + "camera_name", std::string("cam2"));
+  ASSERT_TRUE(tabletop_common::test_support::loadNodelet("/tabletop/cam2_capture", "tabletop_capture/CameraCapture"));
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> l(m);
+    return images.size() >= 5 && !warnings.empty();
+  }, 10.0));
+  {
+    std::lock_guard<std::mutex> l(m);
+    EXPECT_NE(warnings.front().find("no rig_file: no camera_info"), std::string::npos) << warnings.front();
+    EXPECT_EQ(images.front()->width, 640u);
+    EXPECT_EQ(images.front()->height, 480u);
+    EXPECT_TRUE(images.front()->encoding == "bgr8" || images.front()->encoding == "mono8")
+        << images.front()->encoding;
+    EXPECT_EQ(images.front()->header.frame_id, "cam2_optical_frame");
+  }
+  EXPECT_EQ(info_sub.getNumPublishers(), 0u);
+  tabletop_common::test_support::loader().clear();
+}
+
 int main(int argc, char** argv) {
   return tabletop_common::test_support::runNodeletTests(argc, argv, "test_camera_capture", 4);
 }
