@@ -12,6 +12,8 @@ void CameraCaptureConfig::validate() const {
   if (device.empty() || device == "file:") fail("device", "must be a device path or file:<path>");
   if (camera_name.empty() || camera_name.find('/') != std::string::npos)
     fail("camera_name", "must be a plain name such as cam0");
+  if (!rig_file.empty() && !camera_info_file.empty())
+    fail("camera_info_file", "set either rig_file or camera_info_file, not both");
   if (width <= 0 || height <= 0) fail(width <= 0 ? "width" : "height", "must be > 0");
   if (!(fps > 0 && fps <= 1000)) fail("fps", "must lie in (0, 1000]");
   if (!fourcc.empty() && fourcc.size() != 4) fail("fourcc", "must be empty or four characters");
@@ -54,6 +56,7 @@ void addCameraCaptureKeys(CameraCaptureConfig* c, tabletop_common::ConfigSchema*
   s->add("device", &c->device)
       .add("camera_name", &c->camera_name)
       .add("rig_file", &c->rig_file)
+      .add("camera_info_file", &c->camera_info_file)
       .add("width", &c->width)
       .add("height", &c->height)
       .add("fps", &c->fps)
@@ -83,9 +86,9 @@ CameraCaptureConfig loadCameraCaptureConfig(const std::string& path) {
 }
 
 std::string checkRigCameraSize(const CameraModel& camera, const CameraCaptureConfig& c,
-                               const std::string& rig_file) {
+                               const std::string& source) {
   if (camera.width == c.outputWidth() && camera.height == c.outputHeight()) return "";
-  std::string s = rig_file + ": camera '" + camera.name + "' is calibrated for " +
+  std::string s = source + ": camera '" + camera.name + "' is calibrated for " +
                   std::to_string(camera.width) + "x" + std::to_string(camera.height) +
                   " but the nodelet publishes " + std::to_string(c.outputWidth()) + "x" +
                   std::to_string(c.outputHeight());

@@ -11,6 +11,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <set>
@@ -313,7 +314,7 @@ TEST_F(CameraCaptureTest, WithoutARigNoCameraInfoIsPublished) {
   }, 10.0));
   {
     std::lock_guard<std::mutex> l(m);
-    EXPECT_NE(warnings.front().find("no rig_file: no camera_info"), std::string::npos) << warnings.front();
+    EXPECT_NE(warnings.front().find("no camera_info is published"), std::string::npos) << warnings.front();
     EXPECT_EQ(images.front()->width, 640u);
     EXPECT_EQ(images.front()->height, 480u);
     EXPECT_TRUE(images.front()->encoding == "bgr8" || images.front()->encoding == "mono8")
@@ -321,6 +322,52 @@ TEST_F(CameraCaptureTest, WithoutARigNoCameraInfoIsPublished) {
     EXPECT_EQ(images.front()->header.frame_id, "cam2_optical_frame");
   }
   EXPECT_EQ(info_sub.getNumPublishers(), 0u);
+  tabletop_common::test_support::loader().clear();
+}
+
+// camera_info_file (camera_calibration's YAML) instead of a rig: its K and D with each image's
+// stamp, frame <camera_name>_optical_frame.
+TEST_F(CameraCaptureTest, CameraInfoFromACalibrationFile) {
+  {
+    std::ofstream f(root_ + "/cam3.yaml");
+    f << "image_width: 640\nimage_height: 480\ncamera_name: cam3\n"
+         "camera_matrix: {rows: 3, cols: 3, data: [600, 0, 320.5, 0, 601, 240.5, 0, 0, 1]}\n"
+         "distortion_model: plumb_bob\n"
+         "distortion_coefficients: {rows: 1, cols: 5, data: [-0.2, 0.05, 0, 0, 0]}\n";
+  }
+  ros::NodeHandle nh;
+  std::mutex m;
+  std::vector<sensor_msgs::ImageConstPtr> images;
+  std::map<double, sensor_msgs::CameraInfoConstPtr> infos;
+  boost::function<void(const sensor_msgs::ImageConstPtr&)> on_image = [&](const sensor_msgs::ImageConstPtr& i) {
+    std::lock_guard<std::mutex> l(m);
+    images.push_back(i);
+  };
+  boost::function<void(const sensor_msgs::CameraInfoConstPtr&)> on_info = [&](const sensor_msgs::CameraInfoConstPtr& i) {
+    std::lock_guard<std::mutex> l(m);
+    infos[i->header.stamp.toSec()] = i;
+  };
+  ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>("/tabletop/cam3/image_raw", 50, on_image);
+  ros::Subscriber info_sub = nh.subscribe<sensor_msgs::CameraInfo>("/tabletop/cam3/camera_info", 50, on_info);
+  const std::string ns = "/tabletop/cam3_capture/";
+  ros::param::set(ns + "device", "file:" + dir_ + "/img_%04d.png");
+  ros::param::set(ns + "camera_name", std::string("cam3"));
+  ros::param::set(ns + "camera_info_file", "file://" + root_ + "/cam3.yaml");
+  ASSERT_TRUE(tabletop_common::test_support::loadNodelet("/tabletop/cam3_capture", "tabletop_capture/CameraCapture"));
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> l(m);
+    return images.size() >= 5 && infos.count(images[4]->header.stamp.toSec());
+  }, 10.0));
+  {
+    std::lock_guard<std::mutex> l(m);
+    const sensor_msgs::CameraInfo& ci = *infos.at(images[4]->header.stamp.toSec());
+    EXPECT_EQ(ci.header.frame_id, "cam3_optical_frame");
+    EXPECT_EQ(images[4]->header.frame_id, "cam3_optical_frame");
+    EXPECT_EQ(ci.width, 640u);
+    EXPECT_EQ(ci.K[0], 600.0);
+    EXPECT_EQ(ci.K[5], 240.5);
+    EXPECT_EQ(ci.D[0], -0.2);
+  }
   tabletop_common::test_support::loader().clear();
 }
 

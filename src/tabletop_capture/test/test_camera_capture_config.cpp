@@ -25,6 +25,7 @@ TEST(CameraCaptureConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.device, d.device);
   EXPECT_EQ(c.camera_name, d.camera_name);
   EXPECT_EQ(c.rig_file, d.rig_file);
+  EXPECT_EQ(c.camera_info_file, d.camera_info_file);
   EXPECT_EQ(c.width, d.width);
   EXPECT_EQ(c.height, d.height);
   EXPECT_EQ(c.fps, d.fps);
@@ -51,6 +52,7 @@ TEST(CameraCaptureConfig, BadFilesNameTheFileAndTheKey) {
   EXPECT_NE(errorOf("fourcc: YUV\n").find("fourcc"), std::string::npos);
   EXPECT_NE(errorOf("reopen_interval: 0\n").find("reopen_interval"), std::string::npos);
   EXPECT_NE(errorOf("camera_name: a/b\n").find("camera_name"), std::string::npos);
+  EXPECT_NE(errorOf("rig_file: a.yaml\ncamera_info_file: b.yaml\n").find("not both"), std::string::npos);
 }
 
 TEST(CameraCaptureConfig, RigCameraMustHaveThePublishedSize) {

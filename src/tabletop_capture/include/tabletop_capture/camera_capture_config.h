@@ -15,7 +15,8 @@ namespace tabletop_capture {
 struct CameraCaptureConfig {
   std::string device = "/dev/video0";  // or a /dev/v4l/by-id/... path, or file:<path|pattern>
   std::string camera_name = "cam0";
-  std::string rig_file = "";  // "" = no camera_info
+  std::string rig_file = "";          // "" = no camera_info (unless camera_info_file)
+  std::string camera_info_file = "";  // camera_calibration YAML (path or file:// URL)
   int width = 640;
   int height = 480;
   double fps = 25.0;
@@ -44,9 +45,10 @@ void addCameraCaptureKeys(CameraCaptureConfig* c, tabletop_common::ConfigSchema*
 // The file alone, checked. Throws std::runtime_error "<path>: <key>: <problem>".
 CameraCaptureConfig loadCameraCaptureConfig(const std::string& path);
 
-// "" when the rig camera's size is the size the nodelet publishes, otherwise the error (the
-// rig's calibration would not fit the images: with half_resolution it must be the half size).
+// "" when the calibrated camera's size is the size the nodelet publishes, otherwise the error
+// (the calibration would not fit the images: with half_resolution it must be the half size).
+// `source` names the rig or calibration file in the error.
 std::string checkRigCameraSize(const CameraModel& camera, const CameraCaptureConfig& c,
-                               const std::string& rig_file);
+                               const std::string& source);
 
 }  // namespace tabletop_capture

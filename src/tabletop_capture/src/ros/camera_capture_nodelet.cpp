@@ -25,6 +25,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include "tabletop_capture/camera_calibration_file.h"
 #include "tabletop_capture/camera_capture_config.h"
 #include "tabletop_capture/capture_stats.h"
 #include "tabletop_capture/frame_source.h"
@@ -75,7 +76,7 @@ class CameraCaptureNodelet : public nodelet::Nodelet {
     }
     name_ = cfg_.camera_name;
     if (!have_info_)
-      NODELET_WARN("camera capture %s: no rig_file: no camera_info is published on %s/camera_info "
+      NODELET_WARN("camera capture %s: no rig_file (nor camera_info_file): no camera_info is published on %s/camera_info "
                    "(the RigPublisher nodelet or another source must publish it)",
                    name_.c_str(), name_.c_str());
     image_pub_ = nh.advertise<sensor_msgs::Image>(name_ + "/image_raw", cfg_.queue_size);
@@ -91,9 +92,18 @@ class CameraCaptureNodelet : public nodelet::Nodelet {
     thread_ = std::thread([this] { run(); });
   }
 
-  // The rig camera named camera_name, checked against the published size. Throws.
+  // The rig camera named camera_name (or the camera_info_file), checked against the published
+  // size. Throws.
   void loadCameraInfo() {
     frame_id_ = cfg_.camera_name + "_optical_frame";
+    if (!cfg_.camera_info_file.empty()) {
+      const CameraModel cam = loadCameraCalibrationYaml(cfg_.camera_info_file, cfg_.camera_name);
+      const std::string size_error = checkRigCameraSize(cam, cfg_, cfg_.camera_info_file);
+      if (!size_error.empty()) throw std::runtime_error(size_error);
+      info_ = toCameraInfo(cam);
+      have_info_ = true;
+      return;
+    }
     if (cfg_.rig_file.empty()) return;
     const RigDescription rig = loadRigYaml(cfg_.rig_file);
     const int i = rig.findCamera(cfg_.camera_name);
@@ -238,8 +248,9 @@ class CameraCaptureNodelet : public nodelet::Nodelet {
     }
     if (have_info_ && (out.cols != static_cast<int>(info_.width) || out.rows != static_cast<int>(info_.height)))
       return reject("image " + std::to_string(out.cols) + "x" + std::to_string(out.rows) +
-                    " does not match the rig's calibration " + std::to_string(info_.width) + "x" +
-                    std::to_string(info_.height) + " (" + cfg_.rig_file + "); check width/height" +
+                    " does not match the calibration " + std::to_string(info_.width) + "x" +
+                    std::to_string(info_.height) + " (" + cfg_.rig_file + cfg_.camera_info_file +
+                    "); check width/height" +
                     (cfg_.half_resolution ? " (halved by half_resolution)" : ""));
     const ros::Time stamp(frame.stamp);
     auto image = boost::make_shared<sensor_msgs::Image>();
