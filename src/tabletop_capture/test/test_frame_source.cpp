@@ -109,6 +109,55 @@ TEST(FrameSource, VanishedFilesFailAndComeBack) {
   std::filesystem::remove_all(dir);
 }
 
+// A video file (FFmpeg) plays at the configured fps and loops; renamed, it fails at the next
+// start-over and is found again once it is back.
+TEST(FrameSource, VideoFileLoopsAndFailsWhenRenamed) {
+  char tmpl[] = "/tmp/test_frame_source_XXXXXX";
+  const std::string dir = ::mkdtemp(tmpl);
+  const std::string video = dir + "/cam.avi";
+  {
+    cv::VideoWriter w(video, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(64, 48));
+    if (!w.isOpened()) GTEST_SKIP() << "OpenCV's FFmpeg backend cannot write MJPG here";
+    for (int i = 0; i < 5; ++i) w.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar(40 * i, 40 * i, 40 * i)));
+  }
+  FrameSourceSettings s;
+  s.device = "file:" + video;
+  s.width = 64;
+  s.height = 48;
+  s.fps = 25.0;
+  auto src = makeFrameSource(s);
+  std::string why;
+  ASSERT_TRUE(src->open(&why)) << why;
+  EXPECT_NE(src->describe().find("video file"), std::string::npos);
+  // The file says 10 fps; it is played at 25: reported as a difference.
+  ASSERT_FALSE(src->differences().empty());
+  EXPECT_NE(src->differences()[0].find("fps: the file says 10"), std::string::npos) << src->differences()[0];
+  CaptureStats stats(25.0);
+  for (int i = 0; i < 12; ++i) {
+    CapturedFrame f;
+    ASSERT_EQ(src->read(&f, &why), ReadResult::kFrame) << "frame " << i << ": " << why;
+    ASSERT_EQ(f.image.type(), CV_8UC3);
+    EXPECT_NEAR(f.image.at<cv::Vec3b>(10, 10)[0], 40 * (i % 5), 8) << "frame " << i;  // MJPG is lossy
+    stats.add(f.stamp);
+  }
+  EXPECT_NEAR(stats.rate(), 25.0, 5.0);
+  const std::string away = video + ".away";
+  ASSERT_EQ(std::rename(video.c_str(), away.c_str()), 0);
+  ReadResult r = ReadResult::kFrame;
+  for (int i = 0; i < 6 && r == ReadResult::kFrame; ++i) {
+    CapturedFrame f;
+    r = src->read(&f, &why);
+  }
+  EXPECT_EQ(r, ReadResult::kFailed);
+  EXPECT_NE(why.find("no such"), std::string::npos) << why;
+  ASSERT_EQ(std::rename(away.c_str(), video.c_str()), 0);
+  src->close();
+  ASSERT_TRUE(src->open(&why)) << why;
+  CapturedFrame f;
+  EXPECT_EQ(src->read(&f, &why), ReadResult::kFrame) << why;
+  std::filesystem::remove_all(dir);
+}
+
 TEST(FrameSource, MissingDevicesAndBadSettings) {
   FrameSourceSettings s;
   s.device = "/dev/video_does_not_exist";
