@@ -51,6 +51,7 @@ bool FileFrameSource::open(std::string* why) {
   const double file_fps = cap_.get(cv::CAP_PROP_FPS);
   // Exact for a sequence (the backend counts the files); only an estimate for a video file.
   frame_count_ = isPattern() ? std::max(0.0, cap_.get(cv::CAP_PROP_FRAME_COUNT)) : 0.0;
+  nominal_fps_ = settings_.fps;
   accepted_.emplace_back("backend", cap_.getBackendName());
   accepted_.emplace_back("width", std::to_string(w));
   accepted_.emplace_back("height", std::to_string(h));

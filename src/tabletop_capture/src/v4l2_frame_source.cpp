@@ -84,6 +84,8 @@ bool V4l2FrameSource::open(std::string* why) {
       differences_.push_back("trigger: the device has no trigger control (OpenCV's V4L2 backend "
                              "offers none): it runs free");
   }
+  const double device_fps = cap_.get(cv::CAP_PROP_FPS);
+  nominal_fps_ = device_fps > 0 ? device_fps : settings_.fps;
   accepted_.emplace_back("backend", cap_.getBackendName());
   accepted_.emplace_back("fourcc", fourccToString(cap_.get(cv::CAP_PROP_FOURCC)));
   report(cv::CAP_PROP_FRAME_WIDTH, "width");

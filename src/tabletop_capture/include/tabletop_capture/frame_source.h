@@ -61,8 +61,12 @@ class FrameSource {
   // Requested settings the source did not take, one line each, e.g.
   // "fps: asked 25, device gives 30" or "exposure: the device has no exposure control".
   const std::vector<std::string>& differences() const { return differences_; }
+  // The rate frames should come at after open(): what the device accepted (or the file's
+  // pacing); the nominal rate for counting dropped frames.
+  double nominalFps() const { return nominal_fps_; }
 
  protected:
+  double nominal_fps_ = 0.0;
   std::vector<std::pair<std::string, std::string>> accepted_;
   std::vector<std::string> differences_;
 };

@@ -10,6 +10,7 @@
 // every key documented there) read strictly, then any private parameter named like a key
 // overrides it; an unknown one stops the nodelet (tabletop_common/ros/config_overrides.h).
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -40,6 +41,7 @@ namespace tabletop_capture {
 class CameraCaptureNodelet : public nodelet::Nodelet {
  public:
   ~CameraCaptureNodelet() override {
+    diag_.reset();  // no diagnostics callback from here on (it reads what goes below)
     {
       std::lock_guard<std::mutex> lock(stop_mutex_);
       running_ = false;
@@ -171,6 +173,9 @@ class CameraCaptureNodelet : public nodelet::Nodelet {
           accepted_ = source_->accepted();
           differences_ = source_->differences();
           stats_->restart();
+          // Drops are counted against the rate the device accepted.
+          if (source_->nominalFps() > 0 && std::abs(source_->nominalFps() - stats_->nominalFps()) > 1e-6)
+            stats_ = std::make_unique<CaptureStats>(source_->nominalFps());
         }
         NODELET_INFO("camera capture %s: %s %s; accepted:%s", name_.c_str(), dev.c_str(),
                      ever_open ? "open again" : "open", accepted.str().c_str());
@@ -297,7 +302,7 @@ class CameraCaptureNodelet : public nodelet::Nodelet {
     stat.add("source", source_->describe());
     stat.add("state", state_);
     stat.add("rate (Hz)", stats_->rate());
-    stat.add("nominal rate (Hz)", cfg_.fps);
+    stat.add("nominal rate (Hz)", stats_->nominalFps());
     stat.add("jitter (ms)", stats_->jitterMs());
     stat.add("mean interval (ms)", stats_->meanIntervalMs());
     stat.add("dropped frames (window)", stats_->droppedInWindow());
