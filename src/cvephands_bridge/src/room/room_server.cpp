@@ -1,5 +1,9 @@
-// RoomServer and ServerCore's life: option checks, listen and accept loop, stop, admission.
+// RoomServer and ServerCore's life: option checks, the TLS context, listen and accept loop,
+// stop, admission.
 #include "cvephands_bridge/room/room_server.h"
+
+#include <openssl/err.h>
+#include <openssl/ssl.h>
 
 #include <chrono>
 #include <stdexcept>
@@ -15,6 +19,47 @@ bool sameToken(const std::string& expected, const std::string& given) {
   unsigned char diff = 0;  // no early exit: timing does not tell how much matched
   for (size_t i = 0; i < expected.size(); ++i) diff |= uint8_t(expected[i] ^ given[i]);
   return diff == 0;
+}
+
+// OpenSSL's reasons for the last failure on this thread (its error queue, emptied), "; "-joined.
+std::string openSslErrors() {
+  std::string text;
+  while (const unsigned long e = ERR_get_error()) {
+    char buffer[256];
+    ERR_error_string_n(e, buffer, sizeof buffer);
+    text += (text.empty() ? "" : "; ") + std::string(buffer);
+  }
+  return text.empty() ? "unknown OpenSSL error" : text;
+}
+
+// The server side of TLS: TLS 1.2 or newer, the certificate chain and its key from PEM files.
+// Throws std::runtime_error naming the file and OpenSSL's reason.
+void loadTlsContext(net::ssl::context& ctx, const std::string& certificate, const std::string& key) {
+  SSL_CTX* native = ctx.native_handle();
+  ERR_clear_error();
+  ctx.set_options(net::ssl::context::default_workarounds | net::ssl::context::single_dh_use);
+  if (SSL_CTX_set_min_proto_version(native, TLS1_2_VERSION) != 1)
+    throw std::runtime_error("RoomServer: cannot require TLS 1.2: " + openSslErrors());
+  // An encrypted key fails to load instead of asking for its passphrase on the terminal.
+  SSL_CTX_set_default_passwd_cb(native, [](char*, int, int, void*) { return 0; });
+  const auto check = [](const std::string& what, const std::string& file) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec))
+      throw std::runtime_error("RoomServer: TLS " + what + " file " + file +
+                               (std::filesystem::exists(file, ec) ? ": not a regular file" : ": no such file"));
+  };
+  check("certificate", certificate);
+  check("private key", key);
+  if (SSL_CTX_use_certificate_chain_file(native, certificate.c_str()) != 1)
+    throw std::runtime_error("RoomServer: TLS certificate file " + certificate +
+                             ": cannot load a PEM certificate: " + openSslErrors());
+  if (SSL_CTX_use_PrivateKey_file(native, key.c_str(), SSL_FILETYPE_PEM) != 1)
+    throw std::runtime_error("RoomServer: TLS private key file " + key +
+                             ": cannot load an unencrypted PEM private key: " + openSslErrors());
+  if (SSL_CTX_check_private_key(native) != 1)
+    throw std::runtime_error("RoomServer: TLS private key file " + key +
+                             " does not match the certificate in " + certificate + ": " +
+                             openSslErrors());
 }
 
 }  // namespace
@@ -36,6 +81,9 @@ ServerCore::ServerCore(const RoomServerOptions& options) : options_(options) {
     throw std::invalid_argument("RoomServer: max_sender_bytes_per_s must be 0 or >= max_message_size");
   if (!(options_.stall_timeout > 0) || !(options_.join_timeout > 0) || options_.idle_timeout < 0)
     throw std::invalid_argument("RoomServer: timeouts must be positive");
+  if (options_.tls_certificate_file.empty() != options_.tls_private_key_file.empty())
+    throw std::invalid_argument(
+        "RoomServer: TLS needs both tls_certificate_file and tls_private_key_file (or neither)");
 }
 
 ServerCore::~ServerCore() {
@@ -57,6 +105,15 @@ void ServerCore::start() {
     if (ec || !std::filesystem::is_directory(root_))
       throw std::runtime_error("RoomServer: static_root is not a directory: " +
                                options_.static_root);
+  }
+  if (!options_.tls_certificate_file.empty()) {
+    tls_.emplace(net::ssl::context::tls_server);
+    try {
+      loadTlsContext(*tls_, options_.tls_certificate_file, options_.tls_private_key_file);
+    } catch (...) {
+      tls_.reset();
+      throw;
+    }
   }
   try {
     const tcp::endpoint endpoint(net::ip::make_address(options_.bind_address), options_.port);
@@ -240,6 +297,7 @@ RoomServer::~RoomServer() = default;
 void RoomServer::start() { impl_->start(); }
 void RoomServer::stop() { impl_->stop(); }
 uint16_t RoomServer::port() const { return impl_->port(); }
+bool RoomServer::tls() const { return !impl_->options().tls_certificate_file.empty(); }
 const RoomServerOptions& RoomServer::options() const { return impl_->options(); }
 RoomServerStats RoomServer::stats() const { return impl_->stats(); }
 
