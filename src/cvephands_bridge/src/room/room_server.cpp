@@ -2,34 +2,28 @@
 // stop, admission.
 #include "cvephands_bridge/room/room_server.h"
 
-#include <openssl/err.h>
+#include <openssl/bio.h>
+#include <openssl/evp.h>
+#include <openssl/pem.h>
 #include <openssl/ssl.h>
 
 #include <chrono>
 #include <stdexcept>
 
+#include "openssl_errors.h"
 #include "room_server_internal.h"
 
 namespace cvephands {
 namespace room_server_internal {
 namespace {
 
+using room_tls::openSslErrors;
+
 bool sameToken(const std::string& expected, const std::string& given) {
   if (expected.size() != given.size()) return false;
   unsigned char diff = 0;  // no early exit: timing does not tell how much matched
   for (size_t i = 0; i < expected.size(); ++i) diff |= uint8_t(expected[i] ^ given[i]);
   return diff == 0;
-}
-
-// OpenSSL's reasons for the last failure on this thread (its error queue, emptied), "; "-joined.
-std::string openSslErrors() {
-  std::string text;
-  while (const unsigned long e = ERR_get_error()) {
-    char buffer[256];
-    ERR_error_string_n(e, buffer, sizeof buffer);
-    text += (text.empty() ? "" : "; ") + std::string(buffer);
-  }
-  return text.empty() ? "unknown OpenSSL error" : text;
 }
 
 // The server side of TLS: TLS 1.2 or newer, the certificate chain and its key from PEM files.
@@ -40,8 +34,6 @@ void loadTlsContext(net::ssl::context& ctx, const std::string& certificate, cons
   ctx.set_options(net::ssl::context::default_workarounds | net::ssl::context::single_dh_use);
   if (SSL_CTX_set_min_proto_version(native, TLS1_2_VERSION) != 1)
     throw std::runtime_error("RoomServer: cannot require TLS 1.2: " + openSslErrors());
-  // An encrypted key fails to load instead of asking for its passphrase on the terminal.
-  SSL_CTX_set_default_passwd_cb(native, [](char*, int, int, void*) { return 0; });
   const auto check = [](const std::string& what, const std::string& file) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file, ec))
@@ -53,10 +45,20 @@ void loadTlsContext(net::ssl::context& ctx, const std::string& certificate, cons
   if (SSL_CTX_use_certificate_chain_file(native, certificate.c_str()) != 1)
     throw std::runtime_error("RoomServer: TLS certificate file " + certificate +
                              ": cannot load a PEM certificate: " + openSslErrors());
-  if (SSL_CTX_use_PrivateKey_file(native, key.c_str(), SSL_FILETYPE_PEM) != 1)
+  // Read apart from its use, so that a key that loads but belongs to another certificate is
+  // told as such; an encrypted key fails (no passphrase) instead of asking on the terminal.
+  EVP_PKEY* pkey = nullptr;
+  if (BIO* bio = BIO_new_file(key.c_str(), "r")) {
+    pkey = PEM_read_bio_PrivateKey(bio, nullptr, [](char*, int, int, void*) { return 0; }, nullptr);
+    BIO_free(bio);
+  }
+  if (!pkey)
     throw std::runtime_error("RoomServer: TLS private key file " + key +
                              ": cannot load an unencrypted PEM private key: " + openSslErrors());
-  if (SSL_CTX_check_private_key(native) != 1)
+  const bool used = X509_check_private_key(SSL_CTX_get0_certificate(native), pkey) == 1 &&
+                    SSL_CTX_use_PrivateKey(native, pkey) == 1;
+  EVP_PKEY_free(pkey);
+  if (!used)
     throw std::runtime_error("RoomServer: TLS private key file " + key +
                              " does not match the certificate in " + certificate + ": " +
                              openSslErrors());
