@@ -117,6 +117,9 @@ struct RoomClient::Impl::Link final : RoomClient::Impl {
   }
 
   void requestClose() override {
+    // Ended already (refused, kicked, lost): nothing is left to do, but Beast's handshake or
+    // close timer may still be armed and would keep the thread (and close()) waiting for it.
+    if (ended) return ioc.stop();
     close_requested = true;
     doClose();
   }
