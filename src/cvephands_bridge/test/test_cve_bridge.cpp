@@ -3,7 +3,8 @@
 // decodes what the room relays. Checks: the bridge joins by itself (also when the server starts
 // after it), every hand arrives with its id and placement, the decoded volume meshes to the
 // same triangles as the original, the diagnostics count what was sent, and malformed volumes
-// are rejected and counted while the good hands keep flowing.
+// are rejected and counted while the good hands keep flowing. A second bridge joins a TLS room
+// server over wss (tls, tls_ca_file: a throw-away self-signed certificate).
 #include <gtest/gtest.h>
 
 #include <map>
@@ -20,6 +21,7 @@
 #include "cvephands_bridge/room/room_server.h"
 #include "cvephands_bridge/stream/hand_stream_codec.h"
 #include "tabletop_common/ros/test_support.h"
+#include "test_certificate.h"
 
 namespace {
 
@@ -141,6 +143,62 @@ TEST(CveBridge, StreamsHandsIntoTheRoom) {
                 diag.get("hand messages sent").c_str(), diag.get("message size, mean (bytes)").c_str(),
                 diag.get("encode per hand (ms)").c_str());
   }
+  viewer.close();
+  server.stop();
+}
+
+// The bridge's tls and tls_ca_file parameters: it joins a wss room and its hands arrive.
+TEST(CveBridge, StreamsHandsOverTls) {
+  ros::NodeHandle nh;
+  const cvephands_test::TestCertificate cert;
+  cvephands::RoomServerOptions so;
+  so.tls_certificate_file = cert.cert.string();
+  so.tls_private_key_file = cert.key.string();
+  cvephands::RoomServer server(so);
+  server.start();
+  ros::param::set("/tabletop/cve_bridge_tls/server_port", int(server.port()));
+  ros::param::set("/tabletop/cve_bridge_tls/room", std::string("tls_room"));
+  ros::param::set("/tabletop/cve_bridge_tls/name", std::string("rig_tls"));
+  ros::param::set("/tabletop/cve_bridge_tls/tls", true);
+  ros::param::set("/tabletop/cve_bridge_tls/tls_ca_file", cert.cert.string());
+  ros::param::set("/tabletop/cve_bridge_tls/reconnect_interval", 0.2);
+  ros::param::set("/tabletop/cve_bridge_tls/face_video", false);
+  ros::Publisher pub = nh.advertise<tabletop_msgs::HandVolumes>("/tabletop/psfs/hand_volumes", 5);
+  ASSERT_TRUE(loadNodelet("/tabletop/cve_bridge_tls", "cvephands_bridge/CveBridge"));
+
+  std::mutex m;
+  int hands = 0;
+  cvephands::RoomClientOptions co;
+  co.port = server.port();
+  co.tls = true;
+  co.tls_ca_file = cert.cert.string();
+  co.join.room = "tls_room";
+  co.join.name = "viewer";
+  co.join.role = cvephands::room::Role::kViewer;
+  co.on_hands = [&](const cvephands::room::RelayHeader&, const uint8_t*, size_t) {
+    std::lock_guard<std::mutex> l(m);
+    ++hands;
+  };
+  cvephands::RoomClient viewer(co);
+  std::string error;
+  ASSERT_TRUE(viewer.connect(&error)) << error;
+  ASSERT_TRUE(waitFor([&] { return viewer.participants().size() == 2; }, 10.0))
+      << "the bridge did not join over wss";
+  auto msg = boost::make_shared<tabletop_msgs::HandVolumes>();
+  msg->header.frame_id = "world";
+  msg->target_ids = {7};
+  msg->volumes = {cvephands_test::ballVolume(Eigen::Vector3d(-0.1, -0.2, 0.0), 0.05)};
+  // Published until they arrive: the subscription may still be connecting.
+  const auto received = [&] {
+    std::lock_guard<std::mutex> l(m);
+    return hands;
+  };
+  for (int i = 0; i < 250 && received() < 5; ++i) {
+    msg->header.stamp = ros::Time(200.0 + 0.04 * i);
+    pub.publish(msg);
+    ros::WallDuration(0.04).sleep();
+  }
+  EXPECT_GE(received(), 5);
   viewer.close();
   server.stop();
 }

@@ -1,7 +1,8 @@
 // Room server on loopback: RoomClients (as the bridge nodelet will use them) exchange hands
 // through rooms, and raw WebSocket / HTTP clients misbehave (malformed JSON, binary before the
 // join, oversized messages, a client that stops reading, wrong tokens, path traversal) while
-// the well-behaved participants' traffic is counted to show it is unaffected.
+// the well-behaved participants' traffic is counted to show it is unaffected. The same over
+// TLS (https, wss) with a throw-away self-signed certificate made at test time.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 
@@ -21,12 +22,15 @@
 #include <vector>
 
 #include <boost/asio.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 
 #include "cvephands_bridge/room/room_client.h"
 #include "cvephands_bridge/room/room_server.h"
+#include "test_certificate.h"
 
 namespace cvephands {
 namespace {
@@ -74,11 +78,14 @@ struct Inbox {
   std::vector<Hand> hands;
   std::vector<std::vector<room::ParticipantInfo>> lists;
   std::string closed;
+  bool keep_payloads = false;                   // set before wire(): payloads kept as received
+  std::vector<std::vector<uint8_t>> payloads;
 
   RoomClientOptions wire(RoomClientOptions o) {
     o.on_hands = [this](const room::RelayHeader& h, const uint8_t* p, size_t n) {
       std::lock_guard<std::recursive_mutex> lock(m);
       hands.push_back({h, n >= 12 ? payloadIndex(p) : 0u, n, n >= 12 ? payloadAgeMs(p) : 0.0});
+      if (keep_payloads) payloads.emplace_back(p, p + n);
       cv.notify_all();
     };
     o.on_participants = [this](const std::vector<room::ParticipantInfo>& l) {
@@ -988,6 +995,249 @@ TEST(RoomServer, BadOptionsAndAddresses) {
   std::string error;
   EXPECT_FALSE(client.connect(&error));
   EXPECT_EQ(error.rfind("connect:", 0), 0u) << error;
+}
+
+// ---- TLS (https, wss) ----------------------------------------------------------------------
+
+namespace fs = std::filesystem;
+using cvephands_test::TestCertificate;
+
+RoomServerOptions withTls(RoomServerOptions o, const TestCertificate& c) {
+  o.tls_certificate_file = c.cert.string();
+  o.tls_private_key_file = c.key.string();
+  return o;
+}
+
+RoomClientOptions overTls(RoomClientOptions o, const TestCertificate& c) {
+  o.tls = true;
+  o.tls_ca_file = c.cert.string();
+  return o;
+}
+
+// GET over https, trusting `ca_file` and checking the certificate is for 127.0.0.1.
+HttpReply httpsGet(uint16_t port, const std::string& target, const std::string& ca_file) {
+  net::io_context ioc;
+  net::ssl::context ctx(net::ssl::context::tls_client);
+  ctx.load_verify_file(ca_file);
+  ctx.set_verify_mode(net::ssl::verify_peer);
+  beast::ssl_stream<tcp::socket> s(ioc, ctx);
+  X509_VERIFY_PARAM_set1_ip_asc(SSL_get0_param(s.native_handle()), "127.0.0.1");
+  s.next_layer().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+  s.handshake(net::ssl::stream_base::client);
+  http::request<http::empty_body> req(http::verb::get, target, 11);
+  req.set(http::field::host, "127.0.0.1");
+  http::write(s, req);
+  beast::flat_buffer b;
+  http::response_parser<http::string_body> parser;
+  http::read(s, b, parser);
+  beast::error_code ignored;
+  s.shutdown(ignored);
+  const auto& res = parser.get();
+  return {int(res.result_int()), res.body(), std::string(res[http::field::content_type])};
+}
+
+// Waits (generously) until the server has counted `n` closes for `reason`.
+bool waitKicked(const RoomServer& server, const std::string& reason, uint64_t n) {
+  const auto t0 = Clock::now();
+  while (kicked(server, reason) < n && Clock::now() - t0 < 5s) std::this_thread::sleep_for(5ms);
+  return kicked(server, reason) >= n;
+}
+
+// Two rigs join one room over wss with the token; a hand message arrives byte for byte.
+TEST(RoomServerTls, HandsRoundTripOverWss) {
+  const TestCertificate cert;
+  RoomServerOptions o = withTls(loopback(), cert);
+  o.token = "s3cret";
+  RoomServer server(o);
+  server.start();
+  EXPECT_TRUE(server.tls());
+  Inbox ia, ib;
+  ib.keep_payloads = true;
+  auto a = joined(&ia, overTls(clientOptions(server.port(), "r1", "alice", room::Role::kRig, "s3cret"), cert));
+  auto b = joined(&ib, overTls(clientOptions(server.port(), "r1", "bob", room::Role::kRig, "s3cret"), cert));
+  ASSERT_TRUE(a->connected() && b->connected());
+  ASSERT_TRUE(ia.waitFor([&] { return ia.lastListSize() == 2; }));
+  std::vector<uint8_t> hand(3000);
+  for (size_t i = 0; i < hand.size(); ++i) hand[i] = uint8_t(i * 131 + 7);
+  ASSERT_TRUE(a->send(hand.data(), hand.size()));
+  ASSERT_TRUE(ib.waitFor([&] { return !ib.payloads.empty(); }));
+  {
+    std::lock_guard<std::recursive_mutex> lock(ib.m);
+    EXPECT_EQ(ib.hands[0].header.sender, a->self().id);
+    EXPECT_EQ(ib.payloads[0], hand);
+  }
+  // The token still guards the room over TLS.
+  RoomClient nobody(overTls(clientOptions(server.port(), "r1", "eve"), cert));
+  std::string error;
+  EXPECT_FALSE(nobody.connect(&error));
+  EXPECT_EQ(error.rfind("bad_token", 0), 0u) << error;
+  EXPECT_EQ(server.stats().participants.size(), 2u);
+  // stop() tells them through the TLS close handshake.
+  server.stop();
+  ASSERT_TRUE(ia.waitFor([&] { return !ia.closed.empty(); }));
+  EXPECT_EQ(ia.closed.rfind("shutdown", 0), 0u) << ia.closed;
+}
+
+TEST(RoomServerTls, HttpsServesStaticFiles) {
+  const TestCertificate cert;
+  const fs::path dir = cert.dir / "www";
+  fs::create_directories(dir);
+  std::ofstream(dir / "index.html") << "<!doctype html><title>room over https</title>";
+  RoomServerOptions o = withTls(loopback(), cert);
+  o.static_root = dir.string();
+  RoomServer server(o);
+  server.start();
+  HttpReply r = httpsGet(server.port(), "/", cert.cert.string());
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body, "<!doctype html><title>room over https</title>");
+  EXPECT_EQ(r.content_type, "text/html; charset=utf-8");
+  EXPECT_EQ(httpsGet(server.port(), "/nope.html", cert.cert.string()).status, 404);
+  EXPECT_EQ(server.stats().http_requests, 2u);
+}
+
+// A client that does not trust the certificate (system CAs only; or a certificate for another
+// host) fails with the verification's reason; the server goes on serving the next good client.
+TEST(RoomServerTls, UntrustedCertificateFailsVerification) {
+  const TestCertificate cert;
+  RoomServer server(withTls(loopback(), cert));
+  server.start();
+  RoomClientOptions untrusting = clientOptions(server.port(), "r1", "x");
+  untrusting.tls = true;  // no CA file: the system's CAs, which never signed this one
+  RoomClient c1(untrusting);
+  std::string error;
+  EXPECT_FALSE(c1.connect(&error));
+  EXPECT_EQ(error.rfind("tls: certificate verify failed: ", 0), 0u) << error;
+  EXPECT_NE(error.find("self-signed"), std::string::npos) << error;
+  EXPECT_TRUE(waitKicked(server, "tls_handshake", 1));
+
+  // Trusted, but issued for another host than the one connected to.
+  const TestCertificate other("DNS:other.example");
+  RoomServer elsewhere(withTls(loopback(), other));
+  elsewhere.start();
+  RoomClient c2(overTls(clientOptions(elsewhere.port(), "r1", "x"), other));
+  EXPECT_FALSE(c2.connect(&error));
+  EXPECT_EQ(error.rfind("tls: certificate verify failed: ", 0), 0u) << error;
+  EXPECT_NE(error.find("mismatch"), std::string::npos) << error;
+
+  Inbox ia;
+  auto a = joined(&ia, overTls(clientOptions(server.port(), "r1", "good"), cert));
+  EXPECT_TRUE(a->connected());
+  EXPECT_EQ(server.stats().participants.size(), 1u);
+}
+
+// Plain ws and http clients on the TLS port fail their handshake and are closed (counted); a
+// wss client on a plain port fails likewise; both servers go on serving.
+TEST(RoomServerTls, PlainClientsAreRefused) {
+  const TestCertificate cert;
+  RoomServer server(withTls(loopback(), cert));
+  server.start();
+  EXPECT_ANY_THROW(RawClient raw(server.port()));
+  RoomClientOptions plain = clientOptions(server.port(), "r1", "plain");
+  plain.connect_timeout = 2.0;
+  RoomClient c1(plain);
+  std::string error;
+  EXPECT_FALSE(c1.connect(&error));
+  EXPECT_EQ(error.rfind("handshake:", 0), 0u) << error;
+  EXPECT_ANY_THROW(httpGet(server.port(), "/"));
+  EXPECT_TRUE(waitKicked(server, "tls_handshake", 3));
+  Inbox ia;
+  auto a = joined(&ia, overTls(clientOptions(server.port(), "r1", "good"), cert));
+  EXPECT_TRUE(a->connected());
+
+  RoomServer clear(loopback());
+  clear.start();
+  EXPECT_FALSE(clear.tls());
+  RoomClient c2(overTls(clientOptions(clear.port(), "r1", "tls"), cert));
+  EXPECT_FALSE(c2.connect(&error));
+  EXPECT_EQ(error.rfind("tls: ", 0), 0u) << error;
+  Inbox ib;
+  auto b = joined(&ib, clientOptions(clear.port(), "r1", "plain"));
+  EXPECT_TRUE(b->connected());
+}
+
+// TCP connections that never finish (or never start) their TLS handshake wait like any other
+// HTTP connection: more of them than the limits evict the oldest, and a wss join gets in.
+TEST(RoomServerTls, StalledHandshakesCannotLockOutParticipants) {
+  const TestCertificate cert;
+  RoomServerOptions o = withTls(loopback(), cert);
+  o.max_http_connections = 4;
+  o.max_pending = 4;
+  o.max_pending_per_address = 3;
+  RoomServer server(o);
+  server.start();
+  net::io_context ioc;
+  std::vector<std::unique_ptr<tcp::socket>> idle;
+  for (int i = 0; i < 10; ++i) {
+    auto s = std::make_unique<tcp::socket>(ioc);
+    s->connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server.port()));
+    // Every other one starts a TLS record (a handshake, 512 bytes long) and stalls in it.
+    if (i % 2) net::write(*s, net::buffer(std::string("\x16\x03\x01\x02\x00", 5)));
+    idle.push_back(std::move(s));
+  }
+  EXPECT_TRUE(waitKicked(server, "evicted_http", 10 - o.max_pending_per_address));
+  // The first one was closed by the server.
+  char byte;
+  beast::error_code ec = beast::error::timeout;
+  idle.front()->async_read_some(net::buffer(&byte, 1), [&](beast::error_code e, size_t) { ec = e; });
+  ioc.run_for(5s);
+  EXPECT_TRUE(ec == net::error::eof || ec == net::error::connection_reset) << ec.message();
+  Inbox ia, ib;
+  auto a = joined(&ia, overTls(clientOptions(server.port(), "r1", "a"), cert));
+  auto b = joined(&ib, overTls(clientOptions(server.port(), "r1", "b"), cert));
+  EXPECT_TRUE(a->connected() && b->connected());
+  EXPECT_EQ(server.stats().participants.size(), 2u);
+  EXPECT_EQ(kicked(server, "tls_handshake_timeout"), 0u);  // evicted long before their timeout
+}
+
+// Start-up errors name the file and say why (OpenSSL's reason where it has one).
+TEST(RoomServerTls, BadCertificateOrKeyFiles) {
+  const TestCertificate cert, other;
+  const auto startError = [](const RoomServerOptions& o) -> std::string {
+    RoomServer server(o);
+    try {
+      server.start();
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "started";
+  };
+  RoomServerOptions o = loopback();
+  o.tls_certificate_file = cert.cert.string();  // no key
+  EXPECT_THROW(RoomServer{o}, std::invalid_argument);
+
+  o = withTls(loopback(), cert);
+  o.tls_certificate_file = (cert.dir / "missing.pem").string();
+  std::string e = startError(o);
+  EXPECT_NE(e.find("missing.pem: no such file"), std::string::npos) << e;
+
+  const fs::path garbage = cert.dir / "garbage.pem";
+  std::ofstream(garbage) << "not a PEM file\n";
+  o = withTls(loopback(), cert);
+  o.tls_certificate_file = garbage.string();
+  e = startError(o);
+  EXPECT_NE(e.find("certificate file " + garbage.string()), std::string::npos) << e;
+  EXPECT_NE(e.find("no start line"), std::string::npos) << e;  // OpenSSL's reason
+
+  o = withTls(loopback(), cert);
+  o.tls_private_key_file = garbage.string();
+  e = startError(o);
+  EXPECT_NE(e.find("private key file " + garbage.string()), std::string::npos) << e;
+
+  o = withTls(loopback(), cert);
+  o.tls_private_key_file = other.key.string();  // another certificate's key
+  e = startError(o);
+  EXPECT_NE(e.find(other.key.string()), std::string::npos) << e;
+  EXPECT_NE(e.find("does not match"), std::string::npos) << e;
+
+  EXPECT_EQ(startError(withTls(loopback(), cert)), "started");
+
+  // The client's CA file likewise, through connect().
+  RoomClientOptions c = clientOptions(1, "r1", "x");
+  c.tls = true;
+  c.tls_ca_file = (cert.dir / "no-ca.pem").string();
+  RoomClient client(c);
+  EXPECT_FALSE(client.connect(&e));
+  EXPECT_EQ(e, "tls: CA file " + c.tls_ca_file + ": no such file");
 }
 
 }  // namespace

@@ -3,15 +3,23 @@
 #include <atomic>
 #include <chrono>
 #include <deque>
+#include <filesystem>
 #include <future>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <thread>
 
+#include <openssl/ssl.h>
+#include <openssl/x509v3.h>
+
 #include <boost/asio.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
+
+#include "openssl_errors.h"
 
 namespace cvephands {
 namespace {
@@ -21,6 +29,8 @@ namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 using tcp = net::ip::tcp;
 using Payload = std::shared_ptr<const std::vector<uint8_t>>;
+using PlainStream = beast::tcp_stream;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
 
 constexpr auto kCloseTimeout = std::chrono::seconds(2);
 
@@ -29,18 +39,107 @@ std::chrono::steady_clock::duration toDuration(double seconds) {
       std::chrono::duration<double>(seconds));
 }
 
+// The client side of TLS: TLS 1.2 or newer, the server's certificate verified against the
+// system's CAs or those of ca_file. "" or the reason the CA file cannot be used.
+std::string setUpTls(net::ssl::context& ctx, const std::string& ca_file) {
+  SSL_CTX* native = ctx.native_handle();
+  ERR_clear_error();
+  if (SSL_CTX_set_min_proto_version(native, TLS1_2_VERSION) != 1)
+    return "tls: cannot require TLS 1.2: " + room_tls::openSslErrors();
+  ctx.set_verify_mode(net::ssl::verify_peer);
+  if (ca_file.empty()) {
+    if (SSL_CTX_set_default_verify_paths(native) != 1)
+      return "tls: cannot load the system's CA certificates: " + room_tls::openSslErrors();
+    return "";
+  }
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(ca_file, ec))
+    return "tls: CA file " + ca_file + ": no such file";
+  if (SSL_CTX_load_verify_locations(native, ca_file.c_str(), nullptr) != 1)
+    return "tls: CA file " + ca_file + ": cannot load PEM certificates: " + room_tls::openSslErrors();
+  return "";
+}
+
 }  // namespace
 
-// Everything below runs on the client's one io thread, except the members marked otherwise.
-// Handlers capture `this`: close() joins the thread before the object goes, and handlers still
-// queued then are destroyed with the io_context without running.
+// What the API (any thread) and the connection share. The connection itself is Link<Stream>
+// below, one code path for ws (PlainStream) and wss (TlsStream).
 struct RoomClient::Impl {
   explicit Impl(const RoomClientOptions& o) : options(o) {
     if (options.send_queue_length < 1)
       throw std::invalid_argument("RoomClient: send_queue_length < 1");
+    if (options.tls) {
+      tls_context.emplace(net::ssl::context::tls_client);
+      tls_error = setUpTls(*tls_context, options.tls_ca_file);  // connect() reports it
+    }
+  }
+  virtual ~Impl() = default;
+  static std::unique_ptr<Impl> make(const RoomClientOptions& o);
+
+  // On the io thread.
+  virtual void start() = 0;
+  virtual void enqueue(Payload p) = 0;
+  virtual void requestClose() = 0;  // from close()
+
+  template <class Stream>
+  struct Link;
+
+  RoomClientOptions options;
+  std::optional<net::ssl::context> tls_context;  // with options.tls
+  std::string tls_error;                         // why tls_context is unusable
+  net::io_context ioc;
+  std::optional<net::executor_work_guard<net::io_context::executor_type>> work;
+  std::promise<std::string> joined;  // "" or the reason connect() failed
+  std::thread thread;
+  std::promise<void> thread_done;
+
+  // Any thread.
+  std::atomic<bool> connected{false}, user_closed{false}, started{false};
+  std::atomic<uint64_t> sent{0}, bytes_sent{0}, send_dropped{0}, received{0}, bytes_received{0};
+  mutable std::mutex mutex;  // the three below
+  room::ParticipantInfo self;
+  std::vector<room::ParticipantInfo> participants;
+  std::string close_reason;
+};
+
+// Everything in a Link runs on the client's one io thread. Handlers capture `this`: close()
+// joins the thread before the object goes, and handlers still queued then are destroyed with
+// the io_context without running.
+template <class Stream>
+struct RoomClient::Impl::Link final : RoomClient::Impl {
+  static constexpr bool kTls = std::is_same_v<Stream, TlsStream>;
+
+  explicit Link(const RoomClientOptions& o) : Impl(o), ws(makeStream()) {}
+
+  Stream makeStream() {
+    if constexpr (kTls) return Stream(ioc, *tls_context);
+    else return Stream(ioc);
   }
 
-  void start() {
+  void requestClose() override {
+    // Ended already (refused, kicked, lost): nothing is left to do, but Beast's handshake or
+    // close timer may still be armed and would keep the thread (and close()) waiting for it.
+    if (ended) return ioc.stop();
+    close_requested = true;
+    doClose();
+  }
+
+  void start() override {
+    if constexpr (kTls) {
+      if (!tls_error.empty()) return end(tls_error);
+      // The name (or address) the certificate must be for, and the name the server is told
+      // (SNI: names only, never addresses).
+      SSL* ssl = ws.next_layer().native_handle();
+      X509_VERIFY_PARAM* param = SSL_get0_param(ssl);
+      X509_VERIFY_PARAM_set_hostflags(param, X509_CHECK_FLAG_NO_PARTIAL_WILDCARDS);
+      beast::error_code not_address;
+      net::ip::make_address(options.host, not_address);
+      ERR_clear_error();
+      const bool ok = not_address ? X509_VERIFY_PARAM_set1_host(param, options.host.c_str(), 0) == 1 &&
+                                        SSL_set_tlsext_host_name(ssl, options.host.c_str()) == 1
+                                  : X509_VERIFY_PARAM_set1_ip_asc(param, options.host.c_str()) == 1;
+      if (!ok) return end("tls: cannot verify the host " + options.host + ": " + room_tls::openSslErrors());
+    }
     resolver.async_resolve(
         options.host, std::to_string(options.port),
         [this](beast::error_code ec, tcp::resolver::results_type results) {
@@ -55,6 +154,31 @@ struct RoomClient::Impl {
     if (ec) return end("connect: " + ec.message());
     beast::error_code ignored;
     beast::get_lowest_layer(ws).socket().set_option(tcp::no_delay(true), ignored);
+    if constexpr (kTls) {
+      // Within connect_timeout still (the expiry of the TCP connect).
+      ws.next_layer().async_handshake(net::ssl::stream_base::client, [this](beast::error_code ec) {
+        if (ec) return end("tls: " + tlsFailure(ec));
+        handshake();
+      });
+    } else {
+      handshake();
+    }
+  }
+
+  // Why the TLS handshake failed: the certificate check's own reason when that was it.
+  std::string tlsFailure(beast::error_code ec) {
+    if constexpr (kTls) {
+      const long result = SSL_get_verify_result(ws.next_layer().native_handle());
+      if (result != X509_V_OK)
+        return "certificate verify failed: " + std::string(X509_verify_cert_error_string(result)) +
+               (options.tls_ca_file.empty() ? " (trusted: the system's CAs)"
+                                            : " (trusted: CA file " + options.tls_ca_file + ")");
+    }
+    return ec == beast::error::timeout ? std::string("handshake timed out") : ec.message();
+  }
+
+  // The WebSocket handshake, then the join.
+  void handshake() {
     beast::get_lowest_layer(ws).expires_never();  // the websocket timeouts take over
     websocket::stream_base::timeout t;
     t.handshake_timeout = toDuration(options.connect_timeout);
@@ -163,7 +287,7 @@ struct RoomClient::Impl {
     }
   }
 
-  void enqueue(Payload p) {
+  void enqueue(Payload p) override {
     if (ended || close_requested) return;
     if (queue.size() >= options.send_queue_length) {
       queue.pop_front();  // live data: the newest hands matter
@@ -244,13 +368,10 @@ struct RoomClient::Impl {
     return true;
   }
 
-  RoomClientOptions options;
-  net::io_context ioc;
-  std::optional<net::executor_work_guard<net::io_context::executor_type>> work;
   tcp::resolver resolver{ioc};
   net::steady_timer idle_timer{ioc};
   std::chrono::steady_clock::time_point last_heard;
-  websocket::stream<beast::tcp_stream> ws{ioc};
+  websocket::stream<Stream> ws;
   beast::flat_buffer in;
   std::string join_text;
   std::deque<Payload> queue;
@@ -261,20 +382,14 @@ struct RoomClient::Impl {
   uint64_t pings = 0;
   bool close_requested = false;
   std::string server_error;
-  std::promise<std::string> joined;  // "" or the reason connect() failed
-  std::thread thread;
-  std::promise<void> thread_done;
-
-  // Any thread.
-  std::atomic<bool> connected{false}, user_closed{false}, started{false};
-  std::atomic<uint64_t> sent{0}, bytes_sent{0}, send_dropped{0}, received{0}, bytes_received{0};
-  mutable std::mutex mutex;  // the three below
-  room::ParticipantInfo self;
-  std::vector<room::ParticipantInfo> participants;
-  std::string close_reason;
 };
 
-RoomClient::RoomClient(const RoomClientOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+std::unique_ptr<RoomClient::Impl> RoomClient::Impl::make(const RoomClientOptions& o) {
+  if (o.tls) return std::make_unique<Link<TlsStream>>(o);
+  return std::make_unique<Link<PlainStream>>(o);
+}
+
+RoomClient::RoomClient(const RoomClientOptions& options) : impl_(Impl::make(options)) {}
 
 RoomClient::~RoomClient() { close(); }
 
@@ -316,10 +431,7 @@ void RoomClient::close() {
   if (std::this_thread::get_id() == d.thread.get_id())
     throw std::logic_error("RoomClient::close from its own callback");
   d.user_closed = true;
-  net::post(d.ioc, [&d] {
-    d.close_requested = true;
-    d.doClose();
-  });
+  net::post(d.ioc, [&d] { d.requestClose(); });
   d.work.reset();
   if (d.thread_done.get_future().wait_for(kCloseTimeout + std::chrono::seconds(1)) !=
       std::future_status::ready)

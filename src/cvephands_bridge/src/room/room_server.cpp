@@ -1,20 +1,67 @@
-// RoomServer and ServerCore's life: option checks, listen and accept loop, stop, admission.
+// RoomServer and ServerCore's life: option checks, the TLS context, listen and accept loop,
+// stop, admission.
 #include "cvephands_bridge/room/room_server.h"
+
+#include <openssl/bio.h>
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/ssl.h>
 
 #include <chrono>
 #include <stdexcept>
 
+#include "openssl_errors.h"
 #include "room_server_internal.h"
 
 namespace cvephands {
 namespace room_server_internal {
 namespace {
 
+using room_tls::openSslErrors;
+
 bool sameToken(const std::string& expected, const std::string& given) {
   if (expected.size() != given.size()) return false;
   unsigned char diff = 0;  // no early exit: timing does not tell how much matched
   for (size_t i = 0; i < expected.size(); ++i) diff |= uint8_t(expected[i] ^ given[i]);
   return diff == 0;
+}
+
+// The server side of TLS: TLS 1.2 or newer, the certificate chain and its key from PEM files.
+// Throws std::runtime_error naming the file and OpenSSL's reason.
+void loadTlsContext(net::ssl::context& ctx, const std::string& certificate, const std::string& key) {
+  SSL_CTX* native = ctx.native_handle();
+  ERR_clear_error();
+  ctx.set_options(net::ssl::context::default_workarounds | net::ssl::context::single_dh_use);
+  if (SSL_CTX_set_min_proto_version(native, TLS1_2_VERSION) != 1)
+    throw std::runtime_error("RoomServer: cannot require TLS 1.2: " + openSslErrors());
+  const auto check = [](const std::string& what, const std::string& file) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec))
+      throw std::runtime_error("RoomServer: TLS " + what + " file " + file +
+                               (std::filesystem::exists(file, ec) ? ": not a regular file" : ": no such file"));
+  };
+  check("certificate", certificate);
+  check("private key", key);
+  if (SSL_CTX_use_certificate_chain_file(native, certificate.c_str()) != 1)
+    throw std::runtime_error("RoomServer: TLS certificate file " + certificate +
+                             ": cannot load a PEM certificate: " + openSslErrors());
+  // Read apart from its use, so that a key that loads but belongs to another certificate is
+  // told as such; an encrypted key fails (no passphrase) instead of asking on the terminal.
+  EVP_PKEY* pkey = nullptr;
+  if (BIO* bio = BIO_new_file(key.c_str(), "r")) {
+    pkey = PEM_read_bio_PrivateKey(bio, nullptr, [](char*, int, int, void*) { return 0; }, nullptr);
+    BIO_free(bio);
+  }
+  if (!pkey)
+    throw std::runtime_error("RoomServer: TLS private key file " + key +
+                             ": cannot load an unencrypted PEM private key: " + openSslErrors());
+  const bool used = X509_check_private_key(SSL_CTX_get0_certificate(native), pkey) == 1 &&
+                    SSL_CTX_use_PrivateKey(native, pkey) == 1;
+  EVP_PKEY_free(pkey);
+  if (!used)
+    throw std::runtime_error("RoomServer: TLS private key file " + key +
+                             " does not match the certificate in " + certificate + ": " +
+                             openSslErrors());
 }
 
 }  // namespace
@@ -36,6 +83,9 @@ ServerCore::ServerCore(const RoomServerOptions& options) : options_(options) {
     throw std::invalid_argument("RoomServer: max_sender_bytes_per_s must be 0 or >= max_message_size");
   if (!(options_.stall_timeout > 0) || !(options_.join_timeout > 0) || options_.idle_timeout < 0)
     throw std::invalid_argument("RoomServer: timeouts must be positive");
+  if (options_.tls_certificate_file.empty() != options_.tls_private_key_file.empty())
+    throw std::invalid_argument(
+        "RoomServer: TLS needs both tls_certificate_file and tls_private_key_file (or neither)");
 }
 
 ServerCore::~ServerCore() {
@@ -57,6 +107,15 @@ void ServerCore::start() {
     if (ec || !std::filesystem::is_directory(root_))
       throw std::runtime_error("RoomServer: static_root is not a directory: " +
                                options_.static_root);
+  }
+  if (!options_.tls_certificate_file.empty()) {
+    tls_.emplace(net::ssl::context::tls_server);
+    try {
+      loadTlsContext(*tls_, options_.tls_certificate_file, options_.tls_private_key_file);
+    } catch (...) {
+      tls_.reset();
+      throw;
+    }
   }
   try {
     const tcp::endpoint endpoint(net::ip::make_address(options_.bind_address), options_.port);
@@ -240,6 +299,7 @@ RoomServer::~RoomServer() = default;
 void RoomServer::start() { impl_->start(); }
 void RoomServer::stop() { impl_->stop(); }
 uint16_t RoomServer::port() const { return impl_->port(); }
+bool RoomServer::tls() const { return !impl_->options().tls_certificate_file.empty(); }
 const RoomServerOptions& RoomServer::options() const { return impl_->options(); }
 RoomServerStats RoomServer::stats() const { return impl_->stats(); }
 

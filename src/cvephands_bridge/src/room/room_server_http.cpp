@@ -1,4 +1,6 @@
-// HttpSession: plain HTTP requests (the browser client's static files) and the upgrade to /ws.
+// HttpSession: HTTP requests (the browser client's static files) and the upgrade to /ws, on a
+// plain or a TLS stream (HttpSession<PlainStream>, HttpSession<TlsStream>: with TLS the session
+// starts with the handshake, registered as a waiting connection like any other).
 #include <memory>
 #include <optional>
 #include <string_view>
@@ -14,17 +16,21 @@ namespace {
 
 constexpr auto kHttpTimeout = std::chrono::seconds(10);
 
-// Plain HTTP: static files, and the upgrade to a WsSession on /ws.
-class HttpSession : public Connection, public std::enable_shared_from_this<HttpSession> {
+// Static files, and the upgrade to a WsSession on /ws.
+template <class Stream>
+class HttpSession : public Connection, public std::enable_shared_from_this<HttpSession<Stream>> {
  public:
-  HttpSession(ServerCore& server, tcp::socket&& socket)
-      : server_(server), strand_(socket.get_executor()), stream_(std::move(socket)) {}
+  static constexpr bool kTls = std::is_same_v<Stream, TlsStream>;
+
+  HttpSession(ServerCore& server, Stream&& stream)
+      : server_(server), strand_(stream.get_executor()), stream_(std::move(stream)) {}
   ~HttpSession() override;
   void run();
   void shutdown() override;
   void evict() override;
 
  private:
+  void onHandshake(beast::error_code ec);
   void doRead();
   void onRead(beast::error_code ec);
   void respondError(const http::request<http::string_body>& req, http::status status);
@@ -32,62 +38,102 @@ class HttpSession : public Connection, public std::enable_shared_from_this<HttpS
   template <class Response>
   void send(Response&& response);
   void onWrite(beast::error_code ec, bool close);
-  void closeSocket();
+  void finish();       // after a last response: TLS close_notify, then closeSocket
+  void closeSocket();  // cut now
 
   ServerCore& server_;
   net::any_io_executor strand_;
-  beast::tcp_stream stream_;
+  Stream stream_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   std::shared_ptr<void> response_;  // alive until its write completes
   bool registered_ = false, upgraded_ = false;
+  bool closed_ = false;  // by closeSocket (evicted, stopping, done): its errors are no failures
 };
 
-HttpSession::~HttpSession() {
+template <class Stream>
+HttpSession<Stream>::~HttpSession() {
   if (registered_) server_.unregisterConnection(this);
 }
 
-void HttpSession::run() {
-  if (server_.registerConnection(this, weak_from_this(), false, remoteAddress(stream_.socket())) !=
+template <class Stream>
+void HttpSession<Stream>::run() {
+  if (server_.registerConnection(this, this->weak_from_this(), false,
+                                 remoteAddress(beast::get_lowest_layer(stream_).socket())) !=
       Admission::kOk) {
     beast::error_code ignored;
-    stream_.socket().close(ignored);
+    beast::get_lowest_layer(stream_).socket().close(ignored);
     return;
   }
   registered_ = true;
-  net::dispatch(strand_, [self = shared_from_this()] { self->doRead(); });
+  net::dispatch(strand_, [self = this->shared_from_this()] {
+    if constexpr (kTls) {
+      // Waiting like any connection that has not sent its request: evictable, and timed out.
+      beast::get_lowest_layer(self->stream_).expires_after(kHandshakeTimeout);
+      self->stream_.async_handshake(net::ssl::stream_base::server,
+                                    [self](beast::error_code ec) { self->onHandshake(ec); });
+    } else {
+      self->doRead();
+    }
+  });
 }
 
-void HttpSession::shutdown() {
-  net::post(strand_, [self = shared_from_this()] {
+// A plain http or ws client, one that does not trust the certificate, or a port scan: counted
+// and closed (not if the server closed it: evicted or stopping).
+template <class Stream>
+void HttpSession<Stream>::onHandshake(beast::error_code ec) {
+  if (!ec) return doRead();
+  if (!closed_) server_.countKick(ec == beast::error::timeout ? "tls_handshake_timeout" : "tls_handshake");
+  closeSocket();
+}
+
+template <class Stream>
+void HttpSession<Stream>::shutdown() {
+  net::post(strand_, [self = this->shared_from_this()] {
     if (!self->upgraded_) self->closeSocket();
   });
 }
 
 // The oldest waiting HTTP connection goes when the pool or its address is full: a client
 // that connects and never sends a request (or trickles one) cannot keep others out.
-void HttpSession::evict() {
-  net::post(strand_, [self = shared_from_this()] {
+template <class Stream>
+void HttpSession<Stream>::evict() {
+  net::post(strand_, [self = this->shared_from_this()] {
     if (!self->upgraded_) self->closeSocket();  // counted by registerConnection
   });
 }
 
-void HttpSession::closeSocket() {
+template <class Stream>
+void HttpSession<Stream>::closeSocket() {
+  closed_ = true;
   beast::error_code ignored;
-  stream_.socket().shutdown(tcp::socket::shutdown_both, ignored);
-  stream_.close();
+  beast::get_lowest_layer(stream_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+  beast::get_lowest_layer(stream_).close();
 }
 
-void HttpSession::doRead() {
+template <class Stream>
+void HttpSession<Stream>::finish() {
+  if constexpr (kTls) {
+    // close_notify, so that the client can tell the end of the response from a cut.
+    beast::get_lowest_layer(stream_).expires_after(kHttpTimeout);
+    stream_.async_shutdown([self = this->shared_from_this()](beast::error_code) { self->closeSocket(); });
+  } else {
+    closeSocket();
+  }
+}
+
+template <class Stream>
+void HttpSession<Stream>::doRead() {
   parser_.emplace();
   parser_->header_limit(8 * 1024);
   parser_->body_limit(4 * 1024);  // GET has no body; a WebSocket upgrade neither
-  stream_.expires_after(kHttpTimeout);
+  beast::get_lowest_layer(stream_).expires_after(kHttpTimeout);
   http::async_read(stream_, buffer_, *parser_,
-                   [self = shared_from_this()](beast::error_code ec, size_t) { self->onRead(ec); });
+                   [self = this->shared_from_this()](beast::error_code ec, size_t) { self->onRead(ec); });
 }
 
-void HttpSession::onRead(beast::error_code ec) {
+template <class Stream>
+void HttpSession<Stream>::onRead(beast::error_code ec) {
   if (ec) return closeSocket();  // includes end_of_stream and the timeout
   http::request<http::string_body> req = parser_->release();
   const std::string_view target(req.target().data(), req.target().size());
@@ -96,7 +142,7 @@ void HttpSession::onRead(beast::error_code ec) {
     if (path != room::kWebSocketPath) return respondError(req, http::status::not_found);
     if (!server_.originAllowed(req)) return respondError(req, http::status::forbidden);
     upgraded_ = true;
-    std::make_shared<WsSession>(server_, std::move(stream_))->run(std::move(req));
+    startWsSession(server_, std::move(stream_), std::move(req));
     return;
   }
   ++server_.http_requests;
@@ -107,7 +153,8 @@ void HttpSession::onRead(beast::error_code ec) {
   respondFile(req);
 }
 
-void HttpSession::respondError(const http::request<http::string_body>& req, http::status status) {
+template <class Stream>
+void HttpSession<Stream>::respondError(const http::request<http::string_body>& req, http::status status) {
   http::response<http::string_body> res(status, req.version());
   res.set(http::field::server, "cvephands-room");
   res.set(http::field::content_type, "text/plain; charset=utf-8");
@@ -118,7 +165,8 @@ void HttpSession::respondError(const http::request<http::string_body>& req, http
   send(std::move(res));
 }
 
-void HttpSession::respondFile(const http::request<http::string_body>& req) {
+template <class Stream>
+void HttpSession<Stream>::respondFile(const http::request<http::string_body>& req) {
   const std::string_view target(req.target().data(), req.target().size());
   const StaticFileLookup file = resolveStaticFile(server_.root(), target);
   if (file.status != 200) return respondError(req, http::status(file.status));
@@ -147,26 +195,32 @@ void HttpSession::respondFile(const http::request<http::string_body>& req) {
   send(std::move(res));
 }
 
+template <class Stream>
 template <class Response>
-void HttpSession::send(Response&& response) {
+void HttpSession<Stream>::send(Response&& response) {
   auto res = std::make_shared<std::decay_t<Response>>(std::move(response));
   response_ = res;
-  stream_.expires_after(kHttpTimeout);
+  beast::get_lowest_layer(stream_).expires_after(kHttpTimeout);
   http::async_write(stream_, *res,
-                    [self = shared_from_this(), close = res->need_eof()](
+                    [self = this->shared_from_this(), close = res->need_eof()](
                         beast::error_code ec, size_t) { self->onWrite(ec, close); });
 }
 
-void HttpSession::onWrite(beast::error_code ec, bool close) {
+template <class Stream>
+void HttpSession<Stream>::onWrite(beast::error_code ec, bool close) {
   response_.reset();
-  if (ec || close) return closeSocket();
+  if (ec) return closeSocket();
+  if (close) return finish();
   doRead();
 }
 
 }  // namespace
 
 void startHttpSession(ServerCore& server, tcp::socket&& socket) {
-  std::make_shared<HttpSession>(server, std::move(socket))->run();
+  if (net::ssl::context* tls = server.tlsContext())
+    std::make_shared<HttpSession<TlsStream>>(server, TlsStream(std::move(socket), *tls))->run();
+  else
+    std::make_shared<HttpSession<PlainStream>>(server, PlainStream(std::move(socket)))->run();
 }
 
 }  // namespace room_server_internal

@@ -20,8 +20,10 @@
 #include <vector>
 
 #include <boost/asio.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 
 #include "cvephands_bridge/room/room_server.h"
@@ -36,11 +38,16 @@ namespace websocket = beast::websocket;
 using tcp = net::ip::tcp;
 using Clock = std::chrono::steady_clock;
 using Bytes = std::shared_ptr<const std::string>;
+// The two streams a connection runs on; the sessions are templates on them.
+using PlainStream = beast::tcp_stream;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
 
 // After an error message: time for it and the close handshake to go out before the socket is
 // cut (a stalled client never reads them).
 constexpr auto kCloseGrace = std::chrono::seconds(2);
 constexpr auto kShutdownGrace = std::chrono::milliseconds(500);
+// For the TLS handshake, and then for the WebSocket one: a real client takes milliseconds.
+constexpr auto kHandshakeTimeout = std::chrono::seconds(5);
 
 class ServerCore;
 
@@ -89,18 +96,14 @@ class SenderRateLimit {
   Clock::time_point last_;
 };
 
-// One WebSocket participant. All its state lives on its strand (the socket's executor); other
-// connections reach it only through deliver() and shutdown(), which post there.
+// One WebSocket participant as the rooms see it (ServerCore::join, leave, relay, stats). The
+// session is WsSessionOn<Stream> (room_server_websocket.cpp): all its state lives on its strand
+// (the socket's executor); other connections reach it only through deliver() and shutdown(),
+// which post there.
 class WsSession : public Connection, public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(ServerCore& server, beast::tcp_stream&& stream);
-  ~WsSession() override;
-
-  void run(http::request<http::string_body> upgrade);
-  void shutdown() override;
-  void evict() override;
   // Queue a message for this client (any thread).
-  void deliver(Bytes message, bool binary);
+  virtual void deliver(Bytes message, bool binary) = 0;
 
   // Identity: set by ServerCore::join under its mutex, read there too (and on this strand).
   uint32_t id = 0;
@@ -111,48 +114,15 @@ class WsSession : public Connection, public std::enable_shared_from_this<WsSessi
   std::atomic<uint64_t> messages_in{0}, bytes_in{0}, messages_out{0}, bytes_out{0}, dropped{0},
       rate_dropped{0};
   std::atomic<size_t> queued{0};
-
- private:
-  struct Outgoing {
-    Bytes data;
-    bool binary = false;
-    bool close = false;  // the close frame (data unused)
-    websocket::close_reason close_reason;
-  };
-
-  void onAccept(beast::error_code ec);
-  // Takes a message of `bytes` from the sender's rate; false (counted as a drop) if over it.
-  bool withinRate(size_t bytes);
-  void doRead();
-  void onRead(beast::error_code ec);
-  void handleText(std::string_view text);
-  void handleBinary();
-  void enqueue(Bytes message, bool binary);
-  void writeNext();
-  void onWrite(beast::error_code ec, size_t bytes);
-  // Error message, close handshake, and the socket cut after `grace` whatever happens.
-  void kick(const std::string& reason, const std::string& detail,
-            Clock::duration grace = kCloseGrace, bool count = true);
-  void hardKick(const std::string& reason);  // cut now (nothing can be written any more)
-  void end();
-
-  ServerCore& server_;
-  websocket::stream<beast::tcp_stream> ws_;
-  net::steady_timer timer_;  // join timeout, then the close grace
-  http::request<http::string_body> upgrade_;
-  beast::flat_buffer in_;
-  std::deque<Outgoing> queue_;  // waiting, not counting the one being written
-  size_t queued_binary_ = 0;
-  Outgoing in_flight_;
-  bool writing_ = false;
-  Clock::time_point write_started_;
-  bool registered_ = false, joined_ = false, closing_ = false, dead_ = false;
-  bool accepted_ = false, evicted_ = false;  // WebSocket handshake done; evicted during it
-  SenderRateLimit rate_;
 };
 
-// Plain HTTP on a freshly accepted socket (room_server_http.cpp): static files, and the upgrade
-// to a WsSession on /ws.
+// The WebSocket session of an upgrade request that the HTTP session read on `stream` (its TLS
+// handshake, if any, done): registers as waiting to join, answers the upgrade, then reads.
+void startWsSession(ServerCore& server, PlainStream&& stream, http::request<http::string_body> upgrade);
+void startWsSession(ServerCore& server, TlsStream&& stream, http::request<http::string_body> upgrade);
+
+// HTTP on a freshly accepted socket (room_server_http.cpp), after the TLS handshake when the
+// server has a certificate: static files, and the upgrade to a WsSession on /ws.
 void startHttpSession(ServerCore& server, tcp::socket&& socket);
 
 class ServerCore {
@@ -165,6 +135,8 @@ class ServerCore {
   uint16_t port() const { return port_; }
   const RoomServerOptions& options() const { return options_; }
   const std::filesystem::path& root() const { return root_; }
+  // The server's TLS context (certificate and key loaded by start()); null without TLS.
+  net::ssl::context* tlsContext() { return tls_ ? &*tls_ : nullptr; }
   RoomServerStats stats() const;
 
   // A connection registers as waiting (HTTP: not upgraded; WebSocket: not joined) from
@@ -229,6 +201,7 @@ class ServerCore {
   std::condition_variable threads_done_;
   int threads_running_ = 0;
 
+  std::optional<net::ssl::context> tls_;  // set before the threads start, then only read
   std::unique_ptr<net::io_context> ioc_ = std::make_unique<net::io_context>();
   std::optional<tcp::acceptor> acceptor_;
   std::optional<net::executor_work_guard<net::io_context::executor_type>> work_;

@@ -1,4 +1,5 @@
-// WsSession: one WebSocket participant (handshake, join, reads, its bounded send queue, kicks).
+// WsSession: one WebSocket participant (handshake, join, reads, its bounded send queue, kicks),
+// on a plain or a TLS stream (WsSessionOn<PlainStream>, WsSessionOn<TlsStream>).
 #include <algorithm>
 #include <chrono>
 
@@ -9,7 +10,6 @@ namespace room_server_internal {
 namespace {
 
 constexpr size_t kReadChunk = 64 * 1024;
-constexpr auto kHandshakeTimeout = std::chrono::seconds(5);
 // A receiver counts as slow once its current write has waited this long (its socket buffer is
 // full: the link or the reader cannot keep up). Only then is its queue held to queue_length;
 // one that keeps up may take a burst (a sender's backlog after a network hiccup, or the
@@ -33,17 +33,73 @@ websocket::close_code closeCodeFor(const std::string& reason) {
   return websocket::close_code::policy_error;
 }
 
+template <class Stream>
+class WsSessionOn final : public WsSession {
+ public:
+  WsSessionOn(ServerCore& server, Stream&& stream);
+  ~WsSessionOn() override;
+
+  void run(http::request<http::string_body> upgrade);
+  void shutdown() override;
+  void evict() override;
+  void deliver(Bytes message, bool binary) override;
+
+ private:
+  struct Outgoing {
+    Bytes data;
+    bool binary = false;
+    bool close = false;  // the close frame (data unused)
+    websocket::close_reason close_reason;
+  };
+
+  std::shared_ptr<WsSessionOn> shared() {
+    return std::static_pointer_cast<WsSessionOn>(shared_from_this());
+  }
+  void onAccept(beast::error_code ec);
+  // Takes a message of `bytes` from the sender's rate; false (counted as a drop) if over it.
+  bool withinRate(size_t bytes);
+  void doRead();
+  void onRead(beast::error_code ec);
+  void handleText(std::string_view text);
+  void handleBinary();
+  void enqueue(Bytes message, bool binary);
+  void writeNext();
+  void onWrite(beast::error_code ec, size_t bytes);
+  // Error message, close handshake, and the socket cut after `grace` whatever happens.
+  void kick(const std::string& reason, const std::string& detail,
+            Clock::duration grace = kCloseGrace, bool count = true);
+  void hardKick(const std::string& reason);  // cut now (nothing can be written any more)
+  void end();
+
+  ServerCore& server_;
+  websocket::stream<Stream> ws_;
+  net::steady_timer timer_;  // join timeout, then the close grace
+  http::request<http::string_body> upgrade_;
+  beast::flat_buffer in_;
+  std::deque<Outgoing> queue_;  // waiting, not counting the one being written
+  size_t queued_binary_ = 0;
+  Outgoing in_flight_;
+  bool writing_ = false;
+  Clock::time_point write_started_;
+  bool registered_ = false, joined_ = false, closing_ = false, dead_ = false;
+  bool accepted_ = false, evicted_ = false;  // WebSocket handshake done; evicted during it
+  SenderRateLimit rate_;
+};
+
 }  // namespace
 
-WsSession::WsSession(ServerCore& server, beast::tcp_stream&& stream)
+template <class Stream>
+WsSessionOn<Stream>::WsSessionOn(ServerCore& server, Stream&& stream)
     : server_(server), ws_(std::move(stream)), timer_(ws_.get_executor()),
       rate_(server.options().max_sender_messages_per_s, server.options().max_sender_bytes_per_s) {}
 
-WsSession::~WsSession() {
+template <class Stream>
+WsSessionOn<Stream>::~WsSessionOn() {
   if (registered_) server_.unregisterConnection(this);
 }
 
-void WsSession::run(http::request<http::string_body> upgrade) {
+template <class Stream>
+void WsSessionOn<Stream>::run(http::request<http::string_body> upgrade) {
   upgrade_ = std::move(upgrade);
   if (server_.registerConnection(this, weak_from_this(), true,
                                  remoteAddress(beast::get_lowest_layer(ws_).socket())) == Admission::kStopping) {
@@ -62,28 +118,31 @@ void WsSession::run(http::request<http::string_body> upgrade) {
       [](websocket::response_type& res) { res.set(http::field::server, "cvephands-room"); }));
   ws_.read_message_max(0);   // enforced in onRead, so the client gets an error message first
   ws_.auto_fragment(false);  // one frame per message
-  ws_.async_accept(upgrade_, [self = shared_from_this()](beast::error_code ec) { self->onAccept(ec); });
+  ws_.async_accept(upgrade_, [self = shared()](beast::error_code ec) { self->onAccept(ec); });
 }
 
-void WsSession::onAccept(beast::error_code ec) {
+template <class Stream>
+void WsSessionOn<Stream>::onAccept(beast::error_code ec) {
   if (ec) return end();
   accepted_ = true;
   if (evicted_) return kick("evicted", kEvictedDetail, kCloseGrace, /*count=*/false);
   timer_.expires_after(toDuration(server_.options().join_timeout));
-  timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+  timer_.async_wait([self = shared()](beast::error_code ec) {
     if (!ec && !self->joined_ && !self->closing_)
       self->kick("join_timeout", "no join message in time");
   });
   doRead();
 }
 
-void WsSession::doRead() {
-  ws_.async_read_some(in_, kReadChunk, [self = shared_from_this()](beast::error_code ec, size_t) {
+template <class Stream>
+void WsSessionOn<Stream>::doRead() {
+  ws_.async_read_some(in_, kReadChunk, [self = shared()](beast::error_code ec, size_t) {
     self->onRead(ec);
   });
 }
 
-void WsSession::onRead(beast::error_code ec) {
+template <class Stream>
+void WsSessionOn<Stream>::onRead(beast::error_code ec) {
   if (ec) return end();
   if (closing_) return;  // the close handshake reads on its own
   if (in_.size() > server_.options().max_message_size)
@@ -101,10 +160,11 @@ void WsSession::onRead(beast::error_code ec) {
   // Next read through the back of the queue: a read completes in one handler, a write to each
   // receiver takes several, so reading on at once lets a burst from one sender outrun the
   // fan-out (and fill queues of receivers that are not slow at all).
-  net::post(ws_.get_executor(), [self = shared_from_this()] { self->doRead(); });
+  net::post(ws_.get_executor(), [self = shared()] { self->doRead(); });
 }
 
-void WsSession::handleText(std::string_view text) {
+template <class Stream>
+void WsSessionOn<Stream>::handleText(std::string_view text) {
   // Control messages count against the sender's message rate too (a ping flood would keep
   // the server encoding pongs); over it, they are dropped like hand messages.
   if (joined_ && !withinRate(text.size())) return;
@@ -135,26 +195,30 @@ void WsSession::handleText(std::string_view text) {
   }
 }
 
-void WsSession::handleBinary() {
+template <class Stream>
+void WsSessionOn<Stream>::handleBinary() {
   if (!joined_) return kick("not_joined", "binary message before join");
   if (role == room::Role::kViewer) return kick("viewer_cannot_send", "viewers only watch");
   if (!withinRate(in_.size())) return;
   server_.relay(*this, in_);
 }
 
-bool WsSession::withinRate(size_t bytes) {
+template <class Stream>
+bool WsSessionOn<Stream>::withinRate(size_t bytes) {
   if (rate_.admit(bytes, Clock::now())) return true;
   ++rate_dropped;
   ++server_.rate_dropped;
   return false;
 }
 
-void WsSession::deliver(Bytes message, bool binary) {
-  net::post(ws_.get_executor(), [self = shared_from_this(), m = std::move(message),
+template <class Stream>
+void WsSessionOn<Stream>::deliver(Bytes message, bool binary) {
+  net::post(ws_.get_executor(), [self = shared(), m = std::move(message),
                                  binary]() mutable { self->enqueue(std::move(m), binary); });
 }
 
-void WsSession::enqueue(Bytes message, bool binary) {
+template <class Stream>
+void WsSessionOn<Stream>::enqueue(Bytes message, bool binary) {
   if (closing_) return;  // after a kick only its error and close go out
   if (binary) {
     const size_t limit = server_.options().queue_length;
@@ -182,7 +246,8 @@ void WsSession::enqueue(Bytes message, bool binary) {
   if (!writing_) writeNext();
 }
 
-void WsSession::writeNext() {
+template <class Stream>
+void WsSessionOn<Stream>::writeNext() {
   if (queue_.empty() || dead_) return;
   in_flight_ = std::move(queue_.front());
   queue_.pop_front();
@@ -192,17 +257,18 @@ void WsSession::writeNext() {
   write_started_ = Clock::now();
   if (in_flight_.close) {
     ws_.async_close(in_flight_.close_reason,
-                    [self = shared_from_this()](beast::error_code) { self->end(); });
+                    [self = shared()](beast::error_code) { self->end(); });
     return;
   }
   ws_.binary(in_flight_.binary);
   ws_.async_write(net::buffer(*in_flight_.data),
-                  [self = shared_from_this()](beast::error_code ec, size_t bytes) {
+                  [self = shared()](beast::error_code ec, size_t bytes) {
                     self->onWrite(ec, bytes);
                   });
 }
 
-void WsSession::onWrite(beast::error_code ec, size_t bytes) {
+template <class Stream>
+void WsSessionOn<Stream>::onWrite(beast::error_code ec, size_t bytes) {
   writing_ = false;
   in_flight_.data.reset();
   if (ec) return end();
@@ -211,7 +277,8 @@ void WsSession::onWrite(beast::error_code ec, size_t bytes) {
   writeNext();
 }
 
-void WsSession::kick(const std::string& reason, const std::string& detail, Clock::duration grace,
+template <class Stream>
+void WsSessionOn<Stream>::kick(const std::string& reason, const std::string& detail, Clock::duration grace,
                      bool count) {
   if (closing_) return;
   closing_ = true;
@@ -231,19 +298,21 @@ void WsSession::kick(const std::string& reason, const std::string& detail, Clock
   queued = queue_.size();
   if (!writing_) writeNext();
   timer_.expires_after(grace);
-  timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+  timer_.async_wait([self = shared()](beast::error_code ec) {
     if (!ec) self->end();
   });
 }
 
-void WsSession::hardKick(const std::string& reason) {
+template <class Stream>
+void WsSessionOn<Stream>::hardKick(const std::string& reason) {
   if (dead_) return;
   server_.countKick(reason);
   end();
 }
 
-void WsSession::shutdown() {
-  net::post(ws_.get_executor(), [self = shared_from_this()] {
+template <class Stream>
+void WsSessionOn<Stream>::shutdown() {
+  net::post(ws_.get_executor(), [self = shared()] {
     if (self->dead_) return;
     if (!self->closing_)
       return self->kick("shutdown", "the server is stopping", kShutdownGrace, false);
@@ -254,8 +323,9 @@ void WsSession::shutdown() {
   });
 }
 
-void WsSession::evict() {
-  net::post(ws_.get_executor(), [self = shared_from_this()] {
+template <class Stream>
+void WsSessionOn<Stream>::evict() {
+  net::post(ws_.get_executor(), [self = shared()] {
     if (self->joined_ || self->closing_) return;
     if (!self->accepted_) {
       self->evicted_ = true;  // still in the handshake: onAccept closes it
@@ -265,7 +335,8 @@ void WsSession::evict() {
   });
 }
 
-void WsSession::end() {
+template <class Stream>
+void WsSessionOn<Stream>::end() {
   if (dead_) return;
   dead_ = closing_ = true;
   timer_.cancel();
@@ -276,6 +347,14 @@ void WsSession::end() {
   queue_.clear();
   queued = 0;
   if (joined_) server_.leave(this);
+}
+
+void startWsSession(ServerCore& server, PlainStream&& stream, http::request<http::string_body> upgrade) {
+  std::make_shared<WsSessionOn<PlainStream>>(server, std::move(stream))->run(std::move(upgrade));
+}
+
+void startWsSession(ServerCore& server, TlsStream&& stream, http::request<http::string_body> upgrade) {
+  std::make_shared<WsSessionOn<TlsStream>>(server, std::move(stream))->run(std::move(upgrade));
 }
 
 }  // namespace room_server_internal

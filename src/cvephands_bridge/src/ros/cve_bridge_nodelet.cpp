@@ -1,7 +1,8 @@
 // CveBridge nodelet: streams the local user's hands into a room of the collaborative virtual
 // environment (thesis 6.5 "Infrastructure"). psfs/hand_volumes in; per tracked hand a
 // HandStreamEncoder message (band-coded sub-volume, hand_stream_codec.h) sent through a
-// RoomClient (WebSocket) to the room server, which relays it to the other participants.
+// RoomClient (WebSocket, ws:// or with tls wss://) to the room server, which relays it to the
+// other participants.
 // The connection is (re)made from a wall timer, never from the volume callback, so a missing or
 // slow server costs the pipeline nothing: hands are dropped (counted) while disconnected.
 // With face_video on it also sends the user's face (thesis 7.5): frames + hands/targets in, a
@@ -12,6 +13,7 @@
 // documented there) read strictly, then any private parameter named like a key overrides it; an
 // unknown one stops the stage (tabletop_common/ros/config_overrides.h).
 #include <atomic>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -61,6 +63,8 @@ class CveBridgeNodelet : public nodelet::Nodelet {
           .add("room", &options_.join.room)
           .add("name", &options_.join.name)
           .add("token", &options_.join.token)
+          .add("tls", &options_.tls)
+          .add("tls_ca_file", &options_.tls_ca_file)
           .add("send_queue", &queue)
           .add("connect_timeout", &options_.connect_timeout)
           .add("code_bits", &bits)
@@ -90,6 +94,13 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     try {
       encoder_options_.validate();
       if (port < 1 || port > 65535) throw std::invalid_argument("server_port must be in 1..65535");
+      if (!options_.tls_ca_file.empty()) {
+        if (!options_.tls)
+          throw std::invalid_argument("tls_ca_file is set but tls is false (the CA would not be used)");
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(options_.tls_ca_file, ec))
+          throw std::invalid_argument("tls_ca_file " + options_.tls_ca_file + ": no such file");
+      }
       if (!(reconnect > 0.0)) throw std::invalid_argument("reconnect_interval must be > 0");
       if (!(reconnect_max >= reconnect))
         throw std::invalid_argument("reconnect_max_interval must be >= reconnect_interval");
@@ -115,9 +126,11 @@ class CveBridgeNodelet : public nodelet::Nodelet {
       targets_sub_ = nh.subscribe("hands/targets", 2, &CveBridgeNodelet::onTargets, this);
       frames_sub_ = nh.subscribe("frames", 1, &CveBridgeNodelet::onFrames, this);
     }
-    NODELET_INFO("cve_bridge: %s -> ws://%s:%d%s room '%s' as '%s', %d-bit band codes",
-                 sub_.getTopic().c_str(), options_.host.c_str(), port, options_.path.c_str(),
-                 options_.join.room.c_str(), options_.join.name.c_str(), bits);
+    NODELET_INFO("cve_bridge: %s -> %s://%s:%d%s room '%s' as '%s', %d-bit band codes%s%s",
+                 sub_.getTopic().c_str(), options_.tls ? "wss" : "ws", options_.host.c_str(), port,
+                 options_.path.c_str(), options_.join.room.c_str(), options_.join.name.c_str(), bits,
+                 options_.tls ? ", server certificate checked against " : "",
+                 !options_.tls ? "" : options_.tls_ca_file.empty() ? "the system's CAs" : options_.tls_ca_file.c_str());
   }
 
   void ensureConnected() {

@@ -3,7 +3,11 @@
 //
 //   room_server [--bind ADDR] [--port N] [--token T] [--static DIR] [--seats N] [--status S]
 //               [--max-clients N] [--max-pending N] [--max-pending-per-address N]
-//               [--max-rate N] [--max-bandwidth B]
+//               [--max-rate N] [--max-bandwidth B] [--tls-cert FILE --tls-key FILE]
+//
+// With --tls-cert and --tls-key (PEM) it serves https and wss instead of http and ws. Bound to
+// an address other than loopback without them, it warns: the token and the hands would cross
+// the network in clear text.
 //
 // Prints a status line every --status seconds (rooms, participants, connections waiting to
 // join, messages, drops) and stops cleanly on SIGINT / SIGTERM. Arguments starting with "__" (what roslaunch appends: __name:=,
@@ -22,6 +26,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <boost/asio/ip/address.hpp>
 
 #include "cvephands_bridge/room/room_server.h"
 #include "tabletop_common/cli_args.h"
@@ -56,7 +62,7 @@ void usage() {
                "usage: room_server [--bind ADDR] [--port N] [--token T] [--static DIR] [--seats N] "
                "[--status S]\n"
                "                   [--max-clients N] [--max-pending N] [--max-pending-per-address N]\n"
-               "                   [--max-rate N] [--max-bandwidth B]\n"
+               "                   [--max-rate N] [--max-bandwidth B] [--tls-cert FILE --tls-key FILE]\n"
                "  --bind    address to listen on (default 127.0.0.1; 0.0.0.0 for every interface)\n"
                "  --port    TCP port of HTTP + WebSocket (default 8765; 0 = any free port)\n"
                "  --token   shared token every participant must send (default: none)\n"
@@ -71,7 +77,13 @@ void usage() {
                "                     oldest waiting one is closed (\"evicted\")\n"
                "  --max-rate N       hand messages/s per sender (default 200; 0 = no limit)\n"
                "  --max-bandwidth B  bytes/s per sender (default 16e6; 0 = no limit); beyond\n"
-               "                     either, a sender's messages are dropped and counted\n");
+               "                     either, a sender's messages are dropped and counted\n"
+               "  --tls-cert FILE    PEM certificate (chain) and\n"
+               "  --tls-key FILE     its unencrypted PEM private key: serve https and wss (TLS 1.2+)\n"
+               "                     instead of http and ws; both or neither. Needed whenever the\n"
+               "                     port is reachable from other machines (--bind other than\n"
+               "                     127.0.0.1): without TLS the token and the hands travel in\n"
+               "                     clear text\n");
 }
 
 }  // namespace
@@ -98,6 +110,8 @@ int main(int argc, char** argv) {
       o.max_pending_per_address = static_cast<size_t>(args.integer(1, 100000));
     else if (args.is("--max-rate")) o.max_sender_messages_per_s = args.number(0.0);
     else if (args.is("--max-bandwidth")) o.max_sender_bytes_per_s = args.number(0.0);
+    else if (args.is("--tls-cert")) o.tls_certificate_file = args.text();
+    else if (args.is("--tls-key")) o.tls_private_key_file = args.text();
     else if (args.help()) {
       usage();
       return 0;
@@ -105,6 +119,9 @@ int main(int argc, char** argv) {
       args.unknown();
     }
   }
+  if (o.tls_certificate_file.empty() != o.tls_private_key_file.empty())
+    args.fail(o.tls_certificate_file.empty() ? "--tls-key needs --tls-cert (its certificate)"
+                                             : "--tls-cert needs --tls-key (its private key)");
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   if (!static_given) {
@@ -130,12 +147,19 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "room_server: cannot start: %s\n", e.what());
     return 1;
   }
-  std::printf("[room_server] listening on %s:%u (WebSocket path /ws)%s%s\n", o.bind_address.c_str(),
-              server.port(), o.static_root.empty() ? "" : ", client from ",
+  const bool tls = server.tls();
+  std::printf("[room_server] listening on %s:%u (%s, path /ws)%s%s\n", o.bind_address.c_str(),
+              server.port(), tls ? "wss, TLS" : "ws, no TLS", o.static_root.empty() ? "" : ", client from ",
               o.static_root.c_str());
   if (!o.static_root.empty())
-    std::printf("[room_server] open http://%s:%u/ in a browser to enter the room\n",
+    std::printf("[room_server] open %s://%s:%u/ in a browser to enter the room\n", tls ? "https" : "http",
                 o.bind_address == "0.0.0.0" ? "127.0.0.1" : o.bind_address.c_str(), server.port());
+  boost::system::error_code not_address;  // start() accepted it: an address
+  if (!tls && !boost::asio::ip::make_address(o.bind_address, not_address).is_loopback())
+    std::fprintf(stderr,
+                 "[room_server] WARNING: listening on %s without TLS: the token and the hand streams "
+                 "travel in clear text to anyone on the network path; give --tls-cert and --tls-key\n",
+                 o.bind_address.c_str());
   std::fflush(stdout);
   auto last = std::chrono::steady_clock::now();
   while (!g_stop) {

@@ -6,6 +6,7 @@
 // (face_video.h) are counted apart (pictures per second, kbit/s).
 //
 //   room_watch [--host H] [--port N] [--room R] [--token T] [--seconds S] [--wait S] [--decode]
+//              [--tls] [--tls-ca FILE]
 //
 // Prints a line per participant every --interval seconds and a summary at the end (after
 // --seconds, or on SIGINT / SIGTERM). Exit status 1 when it could not join.
@@ -39,6 +40,7 @@ void usage() {
   std::fprintf(stderr,
                "usage: room_watch [--host H] [--port N] [--room R] [--token T] [--seconds S] "
                "[--interval S] [--wait S] [--decode]\n"
+               "                  [--tls] [--tls-ca FILE]\n"
                "  --host      room server address (default 127.0.0.1)\n"
                "  --port      its port (default 8765)\n"
                "  --room      room to watch (default tabletop)\n"
@@ -46,7 +48,11 @@ void usage() {
                "  --seconds   stop after S seconds (default 0: until Ctrl-C)\n"
                "  --interval  seconds between report lines (default 5; 0: summary only)\n"
                "  --wait      keep trying to join for S seconds (a server still starting)\n"
-               "  --decode    decode and mesh every message (C++ decoder + marching cubes)\n");
+               "  --decode    decode and mesh every message (C++ decoder + marching cubes)\n"
+               "  --tls       wss:// (a room server with --tls-cert): its certificate must be for\n"
+               "              --host and signed by a CA of the system's store, or of --tls-ca\n"
+               "  --tls-ca    PEM file of the CA(s) to trust instead (a self-signed certificate is\n"
+               "              its own CA); implies --tls\n");
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -92,6 +98,11 @@ int main(int argc, char** argv) {
     else if (args.is("--interval")) interval = args.number(0.0);
     else if (args.is("--wait")) wait = args.number(0.0);
     else if (args.is("--decode")) decode = true;
+    else if (args.is("--tls")) o.tls = true;
+    else if (args.is("--tls-ca")) {
+      o.tls_ca_file = args.text();
+      o.tls = true;
+    }
     else if (args.help()) {
       usage();
       return 0;
@@ -172,8 +183,8 @@ int main(int argc, char** argv) {
     std::this_thread::sleep_for(std::chrono::milliseconds(250));
   }
   cvephands::RoomClient& client = *owner;
-  std::printf("[room_watch] watching room '%s' at ws://%s:%u/ws\n", o.join.room.c_str(),
-              o.host.c_str(), o.port);
+  std::printf("[room_watch] watching room '%s' at %s://%s:%u/ws\n", o.join.room.c_str(),
+              o.tls ? "wss" : "ws", o.host.c_str(), o.port);
   std::fflush(stdout);
 
   const double start = nowSeconds();

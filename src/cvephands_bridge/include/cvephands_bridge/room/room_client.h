@@ -1,7 +1,7 @@
 // Room client (room_protocol.h): joins a room of a RoomServer, sends this rig's hand messages
 // and hands the other participants' ones to a callback. The hand bridge nodelet feeds the room
-// through it, and the tests use it; it speaks plain WebSocket, so the server may be in the same
-// process, on the same machine or across the network.
+// through it, and the tests use it; it speaks WebSocket (ws://, or wss:// with `tls`), so the
+// server may be in the same process, on the same machine or across the network.
 //
 // Sending never blocks the caller (the nodelet's callback thread): payloads go into a bounded
 // queue written by the client's own thread, and when the link cannot keep up the OLDEST waiting
@@ -27,10 +27,16 @@ struct RoomClientOptions {
   std::string host = "127.0.0.1";
   uint16_t port = 0;
   std::string path = room::kWebSocketPath;
+  // wss:// instead of ws://: TLS 1.2 or newer, and the server's certificate must be valid for
+  // `host` (its name, or its address) and issued by a CA of tls_ca_file (PEM; a self-signed
+  // certificate is its own CA), or of the system's store (/etc/ssl/certs) when that is empty.
+  // A failed check fails connect() with "tls: certificate verify failed: <why>".
+  bool tls = false;
+  std::string tls_ca_file;
   room::JoinRequest join;         // room, display name, token, role
   size_t send_queue_length = 16;  // payloads waiting to be written before the oldest is dropped
   size_t max_message_size = (size_t(1) << 20) + room::kRelayHeaderSize;  // bytes received
-  double connect_timeout = 5.0;  // s: TCP connect + WebSocket handshake + welcome
+  double connect_timeout = 5.0;  // s: TCP connect (+ TLS) + WebSocket handshake + welcome
   // s without any data from the server (which pings every 15 s: half its own idle_timeout)
   // before the connection counts as lost; 0: never.
   double idle_timeout = 40.0;

@@ -11,15 +11,17 @@
 // wrong token) gets an error message and closes that connection only.
 //
 // Exposure: binds 127.0.0.1 unless told otherwise. On another address anyone who reaches the
-// port can join a room unless a token is set; the token travels in clear text (no TLS here:
-// put a TLS-terminating proxy in front for real networks). Browsers let any web page open a
+// port can join a room unless a token is set, and without TLS the token and the hands travel in
+// clear text: give it a certificate (tls_certificate_file, tls_private_key_file) and it serves
+// https and wss instead (TLS 1.2 or newer, OpenSSL) on the same port. Browsers let any web page open a
 // WebSocket to 127.0.0.1, so upgrades from a browser (they carry an Origin header) are accepted
 // only from the server's own pages or allowed_origins, and on a loopback bind only with a
 // loopback Host header (a DNS-rebinding page names its own host there).
 //
-// Implementation: Boost.Beast on Boost.Asio (Debian's Boost, header-only), one io_context with
-// `threads` threads, one strand per connection; hidden behind this header so users do not
-// compile Beast.
+// Implementation: Boost.Beast on Boost.Asio (Debian's Boost, header-only) and asio::ssl, one
+// io_context with `threads` threads, one strand per connection; the sessions are templates on
+// the stream (TCP, or TLS over TCP), one code path for both. Hidden behind this header so users
+// do not compile Beast.
 #pragma once
 
 #include <cstddef>
@@ -42,6 +44,10 @@ struct RoomServerOptions {
   // affected.
   std::vector<std::string> allowed_origins;
   std::string static_root;                    // browser client directory; empty: no HTTP files
+  // TLS: a PEM certificate (the server's first, then any intermediates) and its PEM private key
+  // (not encrypted). Both set: the port speaks only https and wss, and start() throws when
+  // either cannot be loaded or they do not match; both empty: plain http and ws.
+  std::string tls_certificate_file, tls_private_key_file;
   size_t max_message_size = size_t(1) << 20;  // bytes, any message a client sends
   // Hand messages queued per SLOW receiver (its current write has waited > 50 ms) before the
   // oldest is dropped. A receiver that keeps up may queue 4x as many during a burst.
@@ -57,7 +63,8 @@ struct RoomServerOptions {
   size_t max_pending = 64;
   size_t max_pending_per_address = 8;
   // Plain HTTP connections (the browser's file requests, and every WebSocket before its
-  // upgrade): one more, and the oldest goes, of its address (max_pending_per_address) or of all.
+  // upgrade; with TLS from the accept on, so the TLS handshake counts too): one more, and the
+  // oldest goes, of its address (max_pending_per_address) or of all.
   size_t max_http_connections = 32;
   // Per sender: messages per second (hands and control messages) and bytes per second, each a
   // token bucket holding one second's worth (so a burst of up to a second's allowance passes;
@@ -103,7 +110,10 @@ struct RoomServerStats {
   uint64_t rate_dropped = 0;                   // hand messages dropped over senders' rates
   size_t pending = 0;                          // WebSocket connections not joined yet (now)
   // Connections the server closed, by error reason (room_protocol.h), e.g. "slow_client";
-  // "evicted_http": HTTP connections closed for newer ones (no error message: plain HTTP).
+  // "evicted_http": HTTP connections closed for newer ones (no error message: plain HTTP);
+  // with TLS, "tls_handshake": handshakes that failed (a plain http or ws client, a client
+  // that does not trust the certificate, a connection closed before its handshake) and
+  // "tls_handshake_timeout": handshakes that took longer than 5 s.
   std::map<std::string, uint64_t> kicked;
 };
 
@@ -115,13 +125,15 @@ class RoomServer {
   RoomServer& operator=(const RoomServer&) = delete;
 
   // Binds, listens and starts the threads. Throws std::runtime_error when the address cannot
-  // be bound or static_root is not a directory, std::invalid_argument for bad options. Once.
+  // be bound, static_root is not a directory or the TLS certificate or key cannot be loaded
+  // (naming the file and OpenSSL's reason), std::invalid_argument for bad options. Once.
   void start();
   // Closes the listener, tells every client "shutdown" (close code 1001), gives them a moment
   // to close cleanly, then cuts what is left and joins the threads. Returns within ~1.5 s.
   void stop();
 
   uint16_t port() const;  // the bound port, valid after start()
+  bool tls() const;       // https and wss (a certificate was given)
   const RoomServerOptions& options() const;
   RoomServerStats stats() const;  // thread-safe, for diagnostics
 
