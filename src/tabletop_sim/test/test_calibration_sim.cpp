@@ -10,6 +10,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "tabletop_capture/calibration/board_poses.h"
 #include "tabletop_capture/calibration/intrinsic_calibration.h"
@@ -73,6 +77,56 @@ TEST(CalibrationSim, IntrinsicsFromRenderedCheckerboards) {
     EXPECT_NEAR(c.camera.cy, truth.cy, 0.3) << "cam" << camera;
     EXPECT_LT(c.rms_px, 0.3) << "cam" << camera;
   }
+}
+
+// The calibrate_intrinsics tool's job on image files: progress per image, views evenly kept up
+// to max_views, and clear errors for what it cannot use.
+TEST(CalibrationSim, CalibrationFromImageFiles) {
+  const auto rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{8, 320, 240, true});
+  const CameraModel& truth = rig.cameras[1];
+  const CheckerboardSpec board{9, 6, 0.03};
+  const CheckerboardRenderer renderer(truth, board);
+  char dir_template[] = "/tmp/tabletop_calib_XXXXXX";
+  ASSERT_NE(mkdtemp(dir_template), nullptr);
+  const std::string dir = dir_template;
+  std::vector<std::string> files;
+  const auto poses = tabletop_capture::randomBoardPoses(truth, board, 40, 3);
+  for (size_t k = 0; k < poses.size(); ++k) {
+    files.push_back(dir + "/view_" + std::to_string(100 + k) + ".png");
+    ASSERT_TRUE(cv::imwrite(files.back(), renderer.render(poses[k], k)));
+  }
+  files.push_back(dir + "/blank.png");  // no board in it
+  ASSERT_TRUE(cv::imwrite(files.back(), cv::Mat(240, 320, CV_8UC3, cv::Scalar::all(110))));
+  int reported = 0, without = 0;
+  const auto r = tabletop_capture::calibrateIntrinsicsFromImages(
+      files, board, 30, {}, [&](int, const std::string&, bool found) {
+        ++reported;
+        without += !found;
+      });
+  EXPECT_EQ(reported, 41);
+  EXPECT_EQ(r.images, 41);
+  EXPECT_EQ(r.boards_found, 41 - without);
+  EXPECT_GE(r.boards_found, 36);
+  EXPECT_EQ(r.used.size(), 30u);
+  EXPECT_EQ(r.calibration.views, 30);
+  EXPECT_NEAR(r.calibration.camera.fx, truth.fx, 0.005 * truth.fx);
+  EXPECT_EQ(r.calibration.camera.width, 320);
+
+  const std::string odd = dir + "/odd.png";
+  ASSERT_TRUE(cv::imwrite(odd, cv::Mat(120, 160, CV_8UC3, cv::Scalar::all(0))));
+  try {
+    tabletop_capture::calibrateIntrinsicsFromImages({files[0], odd}, board, 30);
+    ADD_FAILURE() << "images of two sizes accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("odd.png: 160x120"), std::string::npos) << e.what();
+  }
+  try {
+    tabletop_capture::calibrateIntrinsicsFromImages({files.back()}, board, 30);
+    ADD_FAILURE() << "a calibration without boards";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("found in 0 of 1 images"), std::string::npos) << e.what();
+  }
+  std::system(("rm -rf '" + dir + "'").c_str());
 }
 
 }  // namespace

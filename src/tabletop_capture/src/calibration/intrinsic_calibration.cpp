@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace tabletop_capture {
@@ -117,6 +118,50 @@ IntrinsicCalibration calibrateIntrinsics(const std::vector<std::vector<Eigen::Ve
                     "blurred or misdetected view? leave it out", v, out.view_rms_px[v], median);
       out.warnings.push_back(text);
     }
+  return out;
+}
+
+ImageCalibration calibrateIntrinsicsFromImages(
+    const std::vector<std::string>& files, const CheckerboardSpec& board, int max_views,
+    const IntrinsicCalibrationOptions& options,
+    const std::function<void(int, const std::string&, bool)>& progress) {
+  board.validate();
+  ImageCalibration out;
+  std::vector<std::vector<Eigen::Vector2d>> views;
+  std::vector<std::string> view_files;
+  cv::Size size;
+  for (size_t i = 0; i < files.size(); ++i) {
+    const cv::Mat image = cv::imread(files[i], cv::IMREAD_GRAYSCALE);
+    if (image.empty()) throw std::runtime_error(files[i] + ": cannot read the image");
+    if (size.area() == 0) size = image.size();
+    if (image.size() != size)
+      throw std::runtime_error(files[i] + ": " + std::to_string(image.cols) + "x" +
+                               std::to_string(image.rows) + ", the first image was " +
+                               std::to_string(size.width) + "x" + std::to_string(size.height) +
+                               " (one camera per run)");
+    std::vector<Eigen::Vector2d> corners;
+    const bool found = detectCheckerboard(image, board, &corners);
+    if (found) {
+      views.push_back(corners);
+      view_files.push_back(files[i]);
+    }
+    ++out.images;
+    if (progress) progress(static_cast<int>(i), files[i], found);
+  }
+  out.boards_found = static_cast<int>(views.size());
+  if (views.size() < 3)
+    throw std::runtime_error("the board (" + std::to_string(board.cols) + "x" +
+                             std::to_string(board.rows) + " inner corners) was found in " +
+                             std::to_string(views.size()) + " of " + std::to_string(files.size()) +
+                             " images; at least 3 are needed");
+  std::vector<std::vector<Eigen::Vector2d>> kept;
+  const size_t n = views.size(), keep = std::min(n, static_cast<size_t>(std::max(3, max_views)));
+  for (size_t k = 0; k < keep; ++k) {
+    const size_t i = k * n / keep;  // evenly spread over the sequence
+    kept.push_back(views[i]);
+    out.used.push_back(view_files[i]);
+  }
+  out.calibration = calibrateIntrinsics(kept, board, size.width, size.height, options);
   return out;
 }
 

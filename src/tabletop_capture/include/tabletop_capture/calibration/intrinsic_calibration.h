@@ -5,6 +5,7 @@
 // from corners in the middle only extrapolates its distortion to the edges). ROS-free.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -43,5 +44,21 @@ struct IntrinsicCalibration {
 IntrinsicCalibration calibrateIntrinsics(const std::vector<std::vector<Eigen::Vector2d>>& views,
                                          const CheckerboardSpec& board, int width, int height,
                                          const IntrinsicCalibrationOptions& options = {});
+
+// The whole job of the calibrate_intrinsics tool: reads the image files in order, detects the
+// board in each (progress(i, file, found) after each), keeps at most max_views of the views
+// with a board, evenly spread over the sequence (calibrateCamera's cost grows with the cube of
+// the view count; a waved board gives hundreds of near-duplicates), and calibrates. Throws
+// std::runtime_error for an unreadable image, images of different sizes, or fewer than 3
+// views with the board.
+struct ImageCalibration {
+  IntrinsicCalibration calibration;
+  int images = 0, boards_found = 0;
+  std::vector<std::string> used;  // the files of the views calibrated from
+};
+ImageCalibration calibrateIntrinsicsFromImages(
+    const std::vector<std::string>& files, const CheckerboardSpec& board, int max_views,
+    const IntrinsicCalibrationOptions& options = {},
+    const std::function<void(int, const std::string&, bool)>& progress = {});
 
 }  // namespace tabletop_capture
