@@ -58,6 +58,40 @@ struct FrameLog {
 
 using tabletop_common::test_support::waitFor;
 
+// A small rig of n cameras (w x h, no distortion) for a synchroniser test, with its static tf
+// sent by `broadcaster`; `frame_prefix` gives its optical frames names of their own, so that the
+// other tests' static tf cannot matter.
+RigDescription testRig(int n, const std::string& frame_prefix, tf2_ros::StaticTransformBroadcaster* broadcaster,
+                       int w = 32, int h = 24) {
+  RigDescription rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{n, w, h, false});
+  std::vector<geometry_msgs::TransformStamped> tfs;
+  for (auto& cam : rig.cameras) {
+    cam.frame_id = frame_prefix + cam.frame_id;
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time::now();
+    t.header.frame_id = "world";
+    t.child_frame_id = cam.frame_id;
+    t.transform = toTransform(cam.world_T_camera);
+    tfs.push_back(t);
+  }
+  broadcaster->sendTransform(tfs);
+  return rig;
+}
+
+// A w x h rgb8 image of one grey level.
+sensor_msgs::ImagePtr greyImage(double stamp, const std::string& frame_id, uint8_t level, int w = 32,
+                                int h = 24) {
+  sensor_msgs::ImagePtr m(new sensor_msgs::Image);
+  m->header.stamp = ros::Time(stamp);
+  m->header.frame_id = frame_id;
+  m->encoding = "rgb8";
+  m->width = w;
+  m->height = h;
+  m->step = 3 * w;
+  m->data.assign(size_t(m->step) * h, level);
+  return m;
+}
+
 }  // namespace
 
 class PipelineTest : public ::testing::Test {
@@ -251,19 +285,9 @@ TEST_F(PipelineTest, SynchroniserSurvivesBadInput) {
   ros::Subscriber dsub = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, on_diag);
   ASSERT_TRUE(load("/bad/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
 
-  const RigDescription rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{2, 32, 24, false});
   // This test must not depend on another test's static tf: publish the two cameras' poses.
   tf2_ros::StaticTransformBroadcaster static_tf;
-  std::vector<geometry_msgs::TransformStamped> tfs;
-  for (const auto& cam : rig.cameras) {
-    geometry_msgs::TransformStamped t;
-    t.header.stamp = ros::Time::now();
-    t.header.frame_id = "world";
-    t.child_frame_id = cam.frame_id;
-    t.transform = toTransform(cam.world_T_camera);
-    tfs.push_back(t);
-  }
-  static_tf.sendTransform(tfs);
+  const RigDescription rig = testRig(2, "", &static_tf);
   ros::Publisher img_pub[2], info_pub[2];
   for (int i = 0; i < 2; ++i) {
     img_pub[i] = nh.advertise<sensor_msgs::Image>("/bad/cam" + std::to_string(i) + "/image_raw", 50);
@@ -368,20 +392,8 @@ TEST_F(PipelineTest, SynchroniserPublishesSetsWithoutASilentCamera) {
   ros::Subscriber sub = nh.subscribe<tabletop_msgs::MultiViewFrame>("/degraded/frames", 50, on_frame);
   ASSERT_TRUE(load("/degraded/frame_synchronizer", "tabletop_capture/FrameSynchronizer"));
 
-  RigDescription rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{3, 32, 24, false});
-  // Frames of its own: the other tests' static tf must not matter.
   tf2_ros::StaticTransformBroadcaster static_tf;
-  std::vector<geometry_msgs::TransformStamped> tfs;
-  for (auto& cam : rig.cameras) {
-    cam.frame_id = "degraded_" + cam.frame_id;
-    geometry_msgs::TransformStamped t;
-    t.header.stamp = ros::Time::now();
-    t.header.frame_id = "world";
-    t.child_frame_id = cam.frame_id;
-    t.transform = toTransform(cam.world_T_camera);
-    tfs.push_back(t);
-  }
-  static_tf.sendTransform(tfs);
+  const RigDescription rig = testRig(3, "degraded_", &static_tf);
   ros::Publisher img_pub[3], info_pub[3];
   for (int i = 0; i < 3; ++i) {
     img_pub[i] = nh.advertise<sensor_msgs::Image>("/degraded/cam" + std::to_string(i) + "/image_raw", 50);
@@ -396,17 +408,7 @@ TEST_F(PipelineTest, SynchroniserPublishesSetsWithoutASilentCamera) {
   }, 10.0));
   ros::WallDuration(0.3).sleep();  // camera_info and tf in
   auto set = [&](double stamp, std::initializer_list<int> cams) {
-    for (int c : cams) {
-      sensor_msgs::ImagePtr m(new sensor_msgs::Image);
-      m->header.stamp = ros::Time(stamp);
-      m->header.frame_id = rig.cameras[c].frame_id;
-      m->encoding = "rgb8";
-      m->width = 32;
-      m->height = 24;
-      m->step = 96;
-      m->data.assign(96 * 24, static_cast<uint8_t>(10 + c));
-      img_pub[c].publish(m);
-    }
+    for (int c : cams) img_pub[c].publish(greyImage(stamp, rig.cameras[c].frame_id, 10 + c));
     ros::WallDuration(0.04).sleep();
   };
   // 1. cam2 has never sent an image (but its camera_info and tf are known): sets without it.
@@ -468,19 +470,8 @@ TEST_F(PipelineTest, SynchroniserTakesImagesThroughImageTransport) {
   nodelet::M_string remap{{"/it/cam1/image_raw", "/elsewhere/camera/image"}};
   ASSERT_TRUE(tabletop_common::test_support::loadNodelet("/it/frame_synchronizer",
                                                          "tabletop_capture/FrameSynchronizer", remap));
-  RigDescription rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{2, 32, 24, false});
   tf2_ros::StaticTransformBroadcaster static_tf;
-  std::vector<geometry_msgs::TransformStamped> tfs;
-  for (auto& cam : rig.cameras) {
-    cam.frame_id = "it_" + cam.frame_id;
-    geometry_msgs::TransformStamped t;
-    t.header.stamp = ros::Time::now();
-    t.header.frame_id = "world";
-    t.child_frame_id = cam.frame_id;
-    t.transform = toTransform(cam.world_T_camera);
-    tfs.push_back(t);
-  }
-  static_tf.sendTransform(tfs);
+  const RigDescription rig = testRig(2, "it_", &static_tf);
   ros::Publisher img_pub[2] = {nh.advertise<sensor_msgs::Image>("/it/cam0/image_raw", 10),
                                nh.advertise<sensor_msgs::Image>("/elsewhere/camera/image", 10)};
   ros::Publisher info_pub[2];
@@ -492,17 +483,7 @@ TEST_F(PipelineTest, SynchroniserTakesImagesThroughImageTransport) {
       << "the synchroniser did not subscribe to the raw and the remapped topic";
   ros::WallDuration(0.3).sleep();
   for (int k = 0; k < 3; ++k) {
-    for (int c = 0; c < 2; ++c) {
-      sensor_msgs::ImagePtr m(new sensor_msgs::Image);
-      m->header.stamp = ros::Time(30.0 + 0.04 * k);
-      m->header.frame_id = rig.cameras[c].frame_id;
-      m->encoding = "rgb8";
-      m->width = 32;
-      m->height = 24;
-      m->step = 96;
-      m->data.assign(96 * 24, static_cast<uint8_t>(50 + c));
-      img_pub[c].publish(m);
-    }
+    for (int c = 0; c < 2; ++c) img_pub[c].publish(greyImage(30.0 + 0.04 * k, rig.cameras[c].frame_id, 50 + c));
     ros::WallDuration(0.04).sleep();
   }
   ASSERT_TRUE(waitFor([&] { return out.size() >= 3; }, 5.0)) << out.size() << " sets";
