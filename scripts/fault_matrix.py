@@ -5,9 +5,10 @@ Run by scripts/fault_matrix.sh with Debian's /usr/bin/python3 (rospy) against la
 at the camera rate. For each fault, in turn: a baseline of --baseline seconds, the fault, then
 up to --max-recovery seconds for the pipeline to come back. Measured per fault:
   - recovery (s): from the end of the fault (or its start, for faults that the pipeline should
-    ride through) to the first set pSfS reconstructs (not one it learns into the background), once a 1 s window shows pSfS at >= 80 % of its
-    baseline rate AND the tracker with the active targets it had before (for the room server:
-    from its restart until the bridge has rejoined);
+    ride through) to the first set of the first 1 s window that shows pSfS reconstructing (sets
+    learned into the background do not count) at >= 80 % of its baseline rate AND the tracker
+    with the active targets it had before (for the room server: from its restart until the
+    bridge has rejoined);
   - sets lost: frame sets the cameras produced in that span (baseline rate x span) that pSfS
     did not reconstruct;
   - message: the first WARN/ERROR on /rosout from a pipeline node during the fault, naming the
@@ -274,7 +275,9 @@ def main():
             if now - ref < 1.0:
                 continue
             if watch.rate(now - 1.0, now) >= 0.8 * base_rate and (watch.targets(now - 1.0, now) or 0) >= base_targets:
-                first = watch.first_set_after(ref)
+                # The first set of the window that shows the pipeline back (not the first after the
+                # fault: on a slow machine sets made before it are still being finished then).
+                first = watch.first_set_after(max(ref, now - 1.0))
                 recovered = max(0.0, (first if first is not None else now) - ref)
                 break
         end = time.monotonic()
