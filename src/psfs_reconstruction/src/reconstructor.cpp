@@ -372,6 +372,9 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
   }
   r.status = FrameResult::Status::kReconstructed;
   r.background_frames = backgrounds_[0].learnedFrames();
+  // A learning that finished no longer needs the models from before it (~20 MB for 8 cameras):
+  // the next resetBackground() keeps the ones in use then.
+  previous_backgrounds_.clear();
 
   fuseWorkspace(rgb, backgrounds_, &r);
 

@@ -204,7 +204,8 @@ class Reconstructor {
   std::vector<BackgroundModel> backgrounds_;
   std::vector<BackgroundModel> loaded_backgrounds_;  // waiting for their rig
   // The models in use when resetBackground() was last called: taken back when the new learning
-  // never sees an empty scene (a relearn or a time jump with the person in view).
+  // never sees an empty scene (a relearn or a time jump with the person in view); dropped once
+  // a learning finishes.
   std::vector<BackgroundModel> previous_backgrounds_;
   std::vector<std::string> loaded_names_;
   std::unique_ptr<ProjectionTable> table_;          // workspace grid (body and skin)
