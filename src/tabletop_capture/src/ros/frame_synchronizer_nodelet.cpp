@@ -54,6 +54,9 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     bool have_pose = false;
     std::string pose_frame;   // the optical frame the pose is of
     ros::WallTime pose_time;  // when the pose was last looked up
+    bool hasPoseOf(const std::string& frame) const { return have_pose && pose_frame == frame; }
+    // A valid camera_info and the pose of the frame it names.
+    bool calibrated() const { return info && hasPoseOf(info->header.frame_id); }
     // Its last complete calibration (camera_info with a pose for its frame): fills its slot in
     // a set it is missing from.
     sensor_msgs::CameraInfoConstPtr published_info;
@@ -290,7 +293,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       std::lock_guard<std::mutex> lock(mutex_);
       for (size_t i = 0; i < cameras_.size(); ++i) {
         const Camera& c = cameras_[i];
-        if (c.info && !(c.have_pose && c.pose_frame == c.info->header.frame_id) &&
+        if (c.info && !c.calibrated() &&
             (ros::WallTime::now() - c.pose_time).toSec() >= 1.0)
           unposed.emplace_back(static_cast<int>(i), c.info->header.frame_id);
       }
@@ -344,7 +347,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     int empty_slots = 0;
     for (size_t i = 0; i < n; ++i) {
       Camera& c = cameras_[i];
-      const bool calibrated = c.info && c.have_pose && c.pose_frame == c.info->header.frame_id;
+      const bool calibrated = c.calibrated();
       if (calibrated) {
         c.published_info = c.info;
         c.published_pose = toTransform(c.pose);
@@ -401,7 +404,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       const Camera& c = cameras_[i];
-      if (c.have_pose && c.pose_frame == frame_id && (now - c.pose_time).toSec() < 1.0) return;
+      if (c.hasPoseOf(frame_id) && (now - c.pose_time).toSec() < 1.0) return;
     }
     Eigen::Isometry3d pose;
     std::string error;
@@ -418,7 +421,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
     // the next image (the static tf may simply not have arrived yet).
     c.pose_time = now;
     if (error.empty()) {
-      if (c.have_pose && c.pose_frame == frame_id) {
+      if (c.hasPoseOf(frame_id)) {
         const double moved_mm = (pose.translation() - c.pose.translation()).norm() * 1e3;
         const double turned_deg =
             Eigen::AngleAxisd(pose.linear() * c.pose.linear().transpose()).angle() * 180.0 / M_PI;
@@ -429,7 +432,7 @@ class FrameSynchronizerNodelet : public nodelet::Nodelet {
       c.pose = pose;
       c.pose_frame = frame_id;
       c.have_pose = true;
-    } else if (!c.have_pose || c.pose_frame != frame_id) {
+    } else if (!c.hasPoseOf(frame_id)) {
       c.have_pose = false;
       NODELET_ERROR_THROTTLE(5.0, "frame synchroniser: %s: no tf %s -> %s (%s): its images are "
                              "left out of the sets (or the sets dropped)", c.name.c_str(),
