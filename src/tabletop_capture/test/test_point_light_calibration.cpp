@@ -1,0 +1,236 @@
+// Extrinsic calibration from a moving point light (calibration/point_light_calibration.h) on
+// synthetic detections of the default simulated rig: the true projections of random light
+// positions in the workspace plus Gaussian pixel noise, with outliers and a camera that rarely
+// sees the light, and the impossible inputs.
+//
+// Noise: the blob detector's error on the simulated rig's rendered spots
+// (tabletop_sim/test_point_light_sim) is NOISE_FIGURE; the tests use kNoisePx, a little more.
+// Tolerances from the physics: a 320x240 camera of the ring has f ~ 230 px and sits ~1.4-1.6 m
+// from the light, so 1 px is ~4.3 mrad (0.25 deg) or ~6.5 mm across at the light. A camera's pose
+// rests on a few hundred light positions spread over its whole view, each with kNoisePx of
+// noise: its position then carries ~6.5 mm x kNoisePx x ~(a geometry factor of a few) /
+// sqrt(N) ~ 0.2-0.5 mm and its orientation ~0.01 deg. The bars (2 mm, 0.2 deg, the issue's)
+// leave a margin of 4x or more; the mean reprojection error is ~1.25 x kNoisePx.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "tabletop_capture/calibration/point_light_calibration.h"
+#include "tabletop_capture/default_rig.h"
+
+namespace tabletop_capture {
+namespace {
+
+constexpr double kNoisePx = 0.15;
+
+struct Synthetic {
+  RigDescription truth, input;  // input: the true intrinsics, identity poses
+  LightTrack track;
+  std::vector<Eigen::Vector3d> lights;  // per frame
+};
+
+struct Faults {
+  double outliers = 0;     // fraction of detections replaced by a random pixel
+  int sparse_camera = -1;  // sees the light in only sparse_fraction of the frames
+  double sparse_fraction = 1;
+};
+
+Synthetic makeSynthetic(int frames, unsigned seed, const Faults& faults = {}) {
+  Synthetic s;
+  s.truth = makeDefaultRig();
+  s.input = s.truth;
+  for (auto& c : s.input.cameras) c.world_T_camera = Eigen::Isometry3d::Identity();
+  std::vector<std::string> names;
+  for (const auto& c : s.truth.cameras) names.push_back(c.name);
+  s.track = LightTrack(names);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0, 1);
+  std::normal_distribution<double> noise(0, kNoisePx);
+  for (int f = 0; f < frames; ++f) {
+    // The workspace box of the default rig: (-0.5, -0.5, 0) + (1, 1, 0.75); the light is held
+    // at least 5 cm above the desk.
+    const Eigen::Vector3d x(-0.5 + unit(rng), -0.5 + unit(rng), 0.05 + 0.7 * unit(rng));
+    s.lights.push_back(x);
+    for (size_t c = 0; c < s.truth.cameras.size(); ++c) {
+      const CameraModel& cam = s.truth.cameras[c];
+      Eigen::Vector2d pixel;
+      if (!cam.projectWorld(x, &pixel) || !cam.inImage(pixel)) continue;
+      if (static_cast<int>(c) == faults.sparse_camera && unit(rng) >= faults.sparse_fraction) continue;
+      pixel += Eigen::Vector2d(noise(rng), noise(rng));
+      if (unit(rng) < faults.outliers) pixel = Eigen::Vector2d(unit(rng) * cam.width, unit(rng) * cam.height);
+      s.track.add(f, static_cast<int>(c), pixel);
+    }
+  }
+  return s;
+}
+
+struct PoseErrors {
+  std::vector<double> position_m, rotation_deg;
+};
+
+// The result mapped onto the truth by the similarity of its light positions onto the true ones
+// (hundreds of points: the alignment itself adds next to nothing to the cameras' errors).
+PoseErrors compare(const PointLightCalibration& result, const Synthetic& s) {
+  Eigen::Matrix3Xd estimated(3, result.points.size()), truth(3, result.points.size());
+  for (size_t p = 0; p < result.points.size(); ++p) {
+    estimated.col(p) = result.points[p];
+    truth.col(p) = s.lights[result.point_frames[p]];
+  }
+  const Eigen::Matrix4d m = Eigen::umeyama(estimated, truth, true);
+  const double scale = m.block<3, 1>(0, 0).norm();
+  const Eigen::Matrix3d r = m.block<3, 3>(0, 0) / scale;
+  PoseErrors e;
+  for (size_t c = 0; c < s.truth.cameras.size(); ++c) {
+    const Eigen::Isometry3d& est = result.rig.cameras[c].world_T_camera;
+    const Eigen::Isometry3d& tru = s.truth.cameras[c].world_T_camera;
+    const Eigen::Vector3d center = scale * r * est.translation() + m.block<3, 1>(0, 3);
+    e.position_m.push_back((center - tru.translation()).norm());
+    const Eigen::AngleAxisd d(tru.linear().transpose() * r * est.linear());
+    e.rotation_deg.push_back(d.angle() * 180 / M_PI);
+  }
+  return e;
+}
+
+void expectWithin(const PoseErrors& e, const PointLightCalibration& r, double position_m, double rotation_deg,
+                  int skip = -1) {
+  for (size_t c = 0; c < e.position_m.size(); ++c) {
+    std::printf("cam%zu: %.2f mm %.4f deg; %d inliers %d outliers, %.3f px RMS\n", c, e.position_m[c] * 1e3,
+                e.rotation_deg[c], r.cameras[c].inliers, r.cameras[c].outliers, r.cameras[c].rms_px);
+    if (static_cast<int>(c) == skip) continue;
+    EXPECT_LT(e.position_m[c], position_m) << "cam" << c;
+    EXPECT_LT(e.rotation_deg[c], rotation_deg) << "cam" << c;
+  }
+  std::printf("mean reprojection error %.3f px, %d iterations\n", r.mean_error_px, r.iterations);
+  EXPECT_LT(r.mean_error_px, 0.3);
+}
+
+TEST(PointLightCalibration, RecoversTheDefaultRig) {
+  const Synthetic s = makeSynthetic(400, 1);
+  const PointLightCalibration r = calibrateFromPointLight(s.input, s.track);
+  EXPECT_EQ(r.frames_used, 400);
+  expectWithin(compare(r, s), r, 0.002, 0.2);
+  for (const auto& w : r.warnings) ADD_FAILURE() << "unexpected warning: " << w;
+  // No input poses: camera 0 is the world, |c1 - c0| = 1.
+  EXPECT_LT((r.rig.cameras[0].world_T_camera.matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-9);
+  EXPECT_NEAR((r.rig.cameras[1].center() - r.rig.cameras[0].center()).norm(), 1.0, 1e-9);
+}
+
+// 10 % of the detections are random pixels (a reflection, another lamp) and cam3 sees the light
+// in only 20 % of the frames (~80 positions instead of ~400: its errors grow by sqrt(5) ~ 2.2,
+// still well inside the bars).
+TEST(PointLightCalibration, OutliersAndASparseCamera) {
+  Faults faults;
+  faults.outliers = 0.1;
+  faults.sparse_camera = 3;
+  faults.sparse_fraction = 0.2;
+  const Synthetic s = makeSynthetic(400, 2, faults);
+  const PointLightCalibration r = calibrateFromPointLight(s.input, s.track);
+  expectWithin(compare(r, s), r, 0.002, 0.2);
+  for (size_t c = 0; c < r.cameras.size(); ++c) {
+    // About 10 % rejected; a few good ones of frames whose other views were mostly wrong too.
+    EXPECT_GT(r.cameras[c].outliers, 0.07 * r.cameras[c].observations) << "cam" << c;
+    EXPECT_LT(r.cameras[c].outliers, 0.15 * r.cameras[c].observations) << "cam" << c;
+  }
+  EXPECT_LT(r.cameras[3].observations, 110);
+}
+
+// Approximate input poses (the truth moved by a few centimetres): the result is expressed in
+// their world and scale.
+TEST(PointLightCalibration, AlignsToApproximateInputPoses) {
+  Synthetic s = makeSynthetic(300, 3);
+  s.input = s.truth;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> cm(0, 0.03);
+  for (auto& c : s.input.cameras) c.world_T_camera.translation() += Eigen::Vector3d(cm(rng), cm(rng), cm(rng));
+  const PointLightCalibration r = calibrateFromPointLight(s.input, s.track);
+  for (size_t c = 0; c < s.truth.cameras.size(); ++c)
+    EXPECT_LT((r.rig.cameras[c].center() - s.truth.cameras[c].center()).norm(), 0.05) << "cam" << c;
+  EXPECT_NE(r.gauge.find("approximate poses"), std::string::npos) << r.gauge;
+}
+
+TEST(PointLightCalibration, SameSeedSameResult) {
+  Faults faults;
+  faults.outliers = 0.1;
+  const Synthetic s = makeSynthetic(200, 4, faults);
+  PointLightCalibrationOptions options;
+  options.seed = 11;
+  const auto a = calibrateFromPointLight(s.input, s.track, options);
+  const auto b = calibrateFromPointLight(s.input, s.track, options);
+  for (size_t c = 0; c < a.rig.cameras.size(); ++c)
+    EXPECT_TRUE(a.rig.cameras[c].world_T_camera.matrix() == b.rig.cameras[c].world_T_camera.matrix()) << "cam" << c;
+}
+
+TEST(PointLightCalibration, RejectsFewerThanThreeCameras) {
+  Synthetic s = makeSynthetic(50, 5);
+  s.input.cameras.resize(2);
+  LightTrack two({"cam0", "cam1"});
+  EXPECT_THROW(calibrateFromPointLight(s.input, two), PointLightCalibrationError);
+}
+
+TEST(PointLightCalibration, RejectsNoFrameSeenByThree) {
+  Synthetic s = makeSynthetic(50, 6);
+  LightTrack pairs(s.track.cameras);
+  for (const auto& f : s.track.frames)  // at most cam0 and cam1 per frame
+    for (int c = 0; c < 2; ++c)
+      if (f.pixels[c]) pairs.add(f.frame, c, *f.pixels[c]);
+  try {
+    calibrateFromPointLight(s.input, pairs);
+    FAIL() << "no exception";
+  } catch (const PointLightCalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("three cameras"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PointLightCalibration, RejectsACameraThatSharesNoFrames) {
+  Synthetic s = makeSynthetic(200, 8);
+  for (auto& f : s.track.frames) f.pixels[5].reset();
+  try {
+    calibrateFromPointLight(s.input, s.track);
+    FAIL() << "no exception";
+  } catch (const PointLightCalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("cam5"), std::string::npos) << e.what();
+  }
+  // Seen in 5 frames only: cannot be placed by PnP.
+  Synthetic t = makeSynthetic(200, 9);
+  int kept = 0;
+  for (auto& f : t.track.frames)
+    if (f.pixels[6] && ++kept > 5) f.pixels[6].reset();
+  try {
+    calibrateFromPointLight(t.input, t.track);
+    FAIL() << "no exception";
+  } catch (const PointLightCalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("cam6 cannot be connected"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PointLightCalibration, WarnsAboutACameraWithFewPoints) {
+  Faults faults;
+  faults.sparse_camera = 2;
+  faults.sparse_fraction = 0.08;  // ~25 of 300
+  const Synthetic s = makeSynthetic(300, 10, faults);
+  const auto r = calibrateFromPointLight(s.input, s.track);
+  bool warned = false;
+  for (const auto& w : r.warnings) warned |= w.rfind("cam2: only", 0) == 0;
+  EXPECT_TRUE(warned);
+}
+
+TEST(LightTrack, CsvRoundTrip) {
+  LightTrack t({"a", "b", "c"});
+  t.add(7, 2, Eigen::Vector2d(1.25, 2.5));
+  t.add(3, 0, Eigen::Vector2d(10.125, 20.0625));
+  t.add(7, 0, Eigen::Vector2d(0, 1));
+  const LightTrack back = parseLightTrackCsv(lightTrackToCsv(t), {"a", "b", "c"}, "t.csv");
+  ASSERT_EQ(back.frames.size(), 2u);
+  EXPECT_EQ(back.frames[0].frame, 3);
+  EXPECT_EQ(back.frames[1].seenBy(), 2);
+  EXPECT_DOUBLE_EQ(back.frames[0].pixels[0]->y(), 20.0625);
+  EXPECT_EQ(back.detectionsPerCamera(), (std::vector<int>{2, 0, 1}));
+  EXPECT_THROW(parseLightTrackCsv("1,d,2,3\n", {"a"}, "t.csv"), LightTrackError);
+  EXPECT_THROW(parseLightTrackCsv("1,a,2\n", {"a"}, "t.csv"), LightTrackError);
+}
+
+}  // namespace
+}  // namespace tabletop_capture
