@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "point_light_problem.h"
 
@@ -271,6 +272,7 @@ std::string chooseGauge(Problem& problem, const RigDescription& input, const Poi
   Eigen::Matrix4d similarity = Eigen::Matrix4d::Identity();
   similarity.block<3, 4>(0, 0) = (options.reference_distance / distance) * problem.camera_T_world[0].matrix().topRows<3>();
   applySimilarity(problem, similarity);
+  problem.camera_T_world[0].setIdentity();  // exactly, not to rounding
   return "world = " + problem.cameras[0].name + "'s optical frame; scale: |" + problem.cameras[0].name + " - " +
          problem.cameras[1].name + "| = " + format("%g", options.reference_distance) +
          " (arbitrary until the desk-marker step sets metres)";
@@ -279,7 +281,7 @@ std::string chooseGauge(Problem& problem, const RigDescription& input, const Poi
 void fillStats(const Problem& problem, const PointLightCalibrationOptions& options, PointLightCalibration* result) {
   const int n = static_cast<int>(problem.cameras.size());
   result->cameras.assign(n, {});
-  std::vector<std::vector<bool>> cells(n, std::vector<bool>(16, false));
+  std::vector<std::vector<cv::Point2f>> inlier_pixels(n);
   double sum = 0, sum2 = 0;
   int count = 0;
   for (const Observation& o : problem.observations) {
@@ -292,10 +294,7 @@ void fillStats(const Problem& problem, const PointLightCalibrationOptions& optio
     sum += e;
     sum2 += e * e;
     ++count;
-    const CameraModel& m = problem.cameras[o.camera];
-    const int gx = std::clamp(static_cast<int>(4 * o.pixel.x() / m.width), 0, 3);
-    const int gy = std::clamp(static_cast<int>(4 * o.pixel.y() / m.height), 0, 3);
-    cells[o.camera][4 * gy + gx] = true;
+    inlier_pixels[o.camera].emplace_back(static_cast<float>(o.pixel.x()), static_cast<float>(o.pixel.y()));
   }
   result->mean_error_px = count ? sum / count : 0;
   result->rms_px = count ? std::sqrt(sum2 / count) : 0;
@@ -310,10 +309,14 @@ void fillStats(const Problem& problem, const PointLightCalibrationOptions& optio
     if (s.outliers > 0.2 * s.observations)
       result->warnings.push_back(name + format(": %.0f of %.0f detections rejected as outliers (reflections or other lights in its view?)",
                                                s.outliers, s.observations));
-    const int covered = static_cast<int>(std::count(cells[c].begin(), cells[c].end(), true));
-    if (covered < 8)
-      result->warnings.push_back(name + format(": the light covered only %.0f of 16 cells of its image: wave it through the whole view",
-                                               covered));
+    if (inlier_pixels[c].size() >= 3) {
+      std::vector<cv::Point2f> hull;
+      cv::convexHull(inlier_pixels[c], hull);
+      s.coverage = cv::contourArea(hull) / (static_cast<double>(problem.cameras[c].width) * problem.cameras[c].height);
+    }
+    if (s.coverage < options.coverage_warning)
+      result->warnings.push_back(name + format(": the light covered only %.0f %% of its image: wave it through the whole workspace",
+                                               100 * s.coverage));
     if (s.rms_px > 0.5) result->warnings.push_back(name + format(": reprojection error %.2f px RMS (over 0.5 px)", s.rms_px));
   }
 }

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -44,6 +45,8 @@ void usage() {
       "  --refine-intrinsics     also refine fx, fy, cx, cy (distortion stays)\n"
       "  --threshold G           darkest grey level a light pixel may have (default 80)\n"
       "  --max-area N            largest light spot in pixels (default 400)\n"
+      "  --truth FILE            a simulated sequence's true rig: also print each camera's error\n"
+      "                          after the similarity of the camera centres onto the true ones\n"
       "  --quiet                 no line per camera directory while reading\n");
 }
 
@@ -107,12 +110,13 @@ std::string report(const tabletop_capture::PointLightCalibration& r, const Light
                 r.rms_px, r.iterations);
   out += line;
   out += "gauge: " + r.gauge + "\n";
-  out += "camera      seen  inliers  outliers  RMS px   centre (world)\n";
+  out += "camera      seen  inliers  outliers  RMS px  coverage  centre (world)\n";
   for (size_t c = 0; c < r.cameras.size(); ++c) {
     const auto& s = r.cameras[c];
     const Eigen::Vector3d x = r.rig.cameras[c].center();
-    std::snprintf(line, sizeof line, "%-10s %5d  %7d  %8d  %6.3f   %7.3f %7.3f %7.3f\n", r.rig.cameras[c].name.c_str(),
-                  s.observations, s.inliers, s.outliers, s.rms_px, x.x(), x.y(), x.z());
+    std::snprintf(line, sizeof line, "%-10s %5d  %7d  %8d  %6.3f  %6.0f %%  %7.3f %7.3f %7.3f\n",
+                  r.rig.cameras[c].name.c_str(), s.observations, s.inliers, s.outliers, s.rms_px, 100 * s.coverage,
+                  x.x(), x.y(), x.z());
     out += line;
   }
   for (const auto& w : r.warnings) out += "WARNING: " + w + "\n";
@@ -120,10 +124,37 @@ std::string report(const tabletop_capture::PointLightCalibration& r, const Light
   return out;
 }
 
+// Each camera's error against a true rig after the similarity (Umeyama, with scale) of the
+// camera centres onto the true ones: what a simulated sequence's calibration is judged by.
+std::string compareWithTruth(const tabletop_capture::RigDescription& rig, const tabletop_capture::RigDescription& truth) {
+  if (truth.cameras.size() != rig.cameras.size()) throw std::runtime_error("--truth: another number of cameras");
+  const int n = static_cast<int>(rig.cameras.size());
+  Eigen::Matrix3Xd est(3, n), tru(3, n);
+  for (int c = 0; c < n; ++c) {
+    est.col(c) = rig.cameras[c].center();
+    tru.col(c) = truth.cameras[c].center();
+  }
+  const Eigen::Matrix4d m = Eigen::umeyama(est, tru, true);
+  const double s = m.block<3, 1>(0, 0).norm();
+  const Eigen::Matrix3d r = m.block<3, 3>(0, 0) / s;
+  std::string out = "against the truth (similarity of the camera centres, scale " + std::to_string(s) + "):\n";
+  char line[160];
+  for (int c = 0; c < n; ++c) {
+    const auto& e = rig.cameras[c].world_T_camera;
+    const auto& t = truth.cameras[c].world_T_camera;
+    const double dp = (s * r * e.translation() + m.block<3, 1>(0, 3) - t.translation()).norm();
+    const double dr = Eigen::AngleAxisd(t.linear().transpose() * r * e.linear()).angle() * 180 / M_PI;
+    std::snprintf(line, sizeof line, "  %-10s position %.2f mm, orientation %.4f deg\n", rig.cameras[c].name.c_str(),
+                  dp * 1e3, dr);
+    out += line;
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string rig_file, images, detections, out, report_file, save_detections;
+  std::string rig_file, images, detections, out, report_file, save_detections, truth_file;
   bool quiet = false;
   tabletop_capture::PointLightCalibrationOptions options;
   tabletop_capture::LightBlobOptions blob_options;
@@ -141,6 +172,7 @@ int main(int argc, char** argv) {
     else if (args.is("--refine-intrinsics")) options.refine_intrinsics = true;
     else if (args.is("--threshold")) blob_options.min_threshold = args.number(1, 254);
     else if (args.is("--max-area")) blob_options.max_area = static_cast<int>(args.integer(1, 1 << 20));
+    else if (args.is("--truth")) truth_file = args.text();
     else if (args.is("--quiet")) quiet = true;
     else if (args.help()) {
       usage();
@@ -169,7 +201,8 @@ int main(int argc, char** argv) {
       std::printf("[calibrate_extrinsics] %s\n", line.c_str());
       std::fflush(stdout);
     });
-    const std::string text = report(result, track);
+    std::string text = report(result, track);
+    if (!truth_file.empty()) text += compareWithTruth(result.rig, tabletop_capture::loadRigYaml(truth_file));
     std::printf("%s", text.c_str());
     if (!report_file.empty()) {
       std::ofstream file(report_file);
