@@ -80,6 +80,10 @@ std::vector<std::vector<LightView>> planLightSequence(const tabletop_capture::Ri
     if (static_cast<int>(c) == faults.sparse_camera) hidden = 1 - (1 - hidden) * faults.sparse_fraction;
     hiders.emplace_back(hidden, faults.mean_hidden_frames);
   }
+  // The LED's axis: a smooth random walk of directions (a path in a cube around 0, normalised).
+  const Eigen::AlignedBox3d around_zero(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1));
+  const auto axes = randomLightPath(around_zero, static_cast<int>(path.size()), seed + 7, 0.05, 0.0);
+  const double cos_half_angle = std::cos(faults.emission_half_angle_deg * M_PI / 180);
   std::vector<std::vector<LightView>> views(path.size(), std::vector<LightView>(rig.cameras.size()));
   for (size_t f = 0; f < path.size(); ++f)
     for (size_t c = 0; c < rig.cameras.size(); ++c) {
@@ -89,7 +93,10 @@ std::vector<std::vector<LightView>> planLightSequence(const tabletop_capture::Ri
       Eigen::Vector2d pixel;
       const bool in_view = cam.projectWorld(path[f], &pixel) && pixel.x() >= 3 && pixel.y() >= 3 &&
                            pixel.x() <= cam.width - 4 && pixel.y() <= cam.height - 4;
-      if (!in_view || hidden) continue;
+      const Eigen::Vector3d to_camera = (cam.center() - path[f]).normalized();
+      const bool shines = faults.emission_half_angle_deg >= 180 ||
+                          to_camera.dot(axes[f].normalized()) >= cos_half_angle;
+      if (!in_view || hidden || !shines) continue;
       if (u(rng) < faults.outliers) {
         // A reflection (on the desk, a screen) somewhere else: the light itself is hidden.
         v.reflection = true;

@@ -28,6 +28,9 @@ struct LightSequenceFaults {
   int sparse_camera = -1;     // this camera sees the light in only sparse_fraction of the frames
   double sparse_fraction = 1;
   int mean_hidden_frames = 20;  // occlusions come in runs of about this length
+  // An LED shines into a cone about its axis (180: a diffuser all round). The axis turns slowly
+  // as the hand waves, so cameras on opposite sides see the light at different times.
+  double emission_half_angle_deg = 180;
 };
 
 // What one camera shows at one instant.

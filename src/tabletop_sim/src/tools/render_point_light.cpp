@@ -33,6 +33,8 @@ void usage() {
       "  --outliers F           fraction of views showing a reflection instead of the light (default 0)\n"
       "  --sparse-camera I      this camera sees the light only --sparse-fraction of the time\n"
       "  --sparse-fraction F    (default 0.2)\n"
+      "  --emission-angle DEG   the LED shines into a cone of this half angle about an axis that\n"
+      "                         turns as the hand waves (default 180: all round)\n"
       "  --noise S              sensor noise, grey levels (default 2)\n"
       "  --rough-poses M        intrinsics_rig.yaml gets the true poses moved by about M metres and\n"
       "                         turned by M rad (a rig measured by hand; calibrate_extrinsics then\n"
@@ -60,6 +62,7 @@ int main(int argc, char** argv) {
     else if (args.is("--outliers")) faults.outliers = args.number(0, 1);
     else if (args.is("--sparse-camera")) faults.sparse_camera = static_cast<int>(args.integer(0, 15));
     else if (args.is("--sparse-fraction")) faults.sparse_fraction = args.number(0, 1);
+    else if (args.is("--emission-angle")) faults.emission_half_angle_deg = args.number(1, 180);
     else if (args.is("--noise")) image_options.noise_sigma = args.number(0, 50);
     else if (args.is("--rough-poses")) rough = args.number(0, 1);
     else if (args.help()) {
