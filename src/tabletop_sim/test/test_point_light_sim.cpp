@@ -8,10 +8,13 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "tabletop_capture/calibration/light_blob.h"
+#include "tabletop_capture/calibration/light_images.h"
 #include "tabletop_capture/calibration/point_light_calibration.h"
 #include "tabletop_capture/default_rig.h"
 #include "tabletop_sim/point_light.h"
@@ -142,6 +145,47 @@ TEST(PointLightSim, CalibratesTheRenderedRig) {
   const auto result = tabletop_capture::calibrateFromPointLight(input, r.track);
   for (const auto& w : result.warnings) std::printf("warning: %s\n", w.c_str());
   expectCloseToTruth(result, r, 0.002, 0.2);
+}
+
+// The image-file path of calibrate_extrinsics: DIR/<camera>/NNNNN.png, matched by file name (a
+// frame one camera dropped is just missing there), colour and grey images alike.
+TEST(PointLightSim, DetectsTheLightInImageFiles) {
+  char dir_template[] = "/tmp/test_point_light_XXXXXX";
+  const std::string dir = mkdtemp(dir_template);
+  const auto rig = tabletop_capture::makeDefaultRig(tabletop_capture::DefaultRigOptions{3, 320, 240, true});
+  const auto path = randomLightPath(kWorkspace, 12, 9, 0.03);
+  const auto views = planLightSequence(rig, path, {}, 10);
+  std::vector<std::string> names;
+  for (const auto& c : rig.cameras) {
+    names.push_back(c.name);
+    ASSERT_EQ(std::system(("mkdir -p " + dir + "/" + c.name).c_str()), 0);
+  }
+  for (int f = 0; f < 12; ++f)
+    for (size_t c = 0; c < 3; ++c) {
+      if (c == 1 && f == 4) continue;  // dropped
+      cv::Mat image = renderLightView(rig.cameras[c], views[f][c], {}, f * 3 + c);
+      if (c == 2) cv::cvtColor(image, image, cv::COLOR_RGB2GRAY);
+      char name[32];
+      std::snprintf(name, sizeof name, "/%05d.png", f);
+      ASSERT_TRUE(cv::imwrite(dir + "/" + rig.cameras[c].name + name, image));
+    }
+  std::vector<int> progress;
+  const auto found = tabletop_capture::detectLightInImages(
+      names, dir, {}, [&](int c, const tabletop_capture::LightImagesCamera&) { progress.push_back(c); });
+  EXPECT_EQ(progress, (std::vector<int>{0, 1, 2}));
+  ASSERT_EQ(found.instants.size(), 12u);
+  EXPECT_EQ(found.instants[4], "00004.png");
+  EXPECT_EQ(found.cameras[1].images, 11);
+  for (const auto& frame : found.track.frames)
+    for (size_t c = 0; c < 3; ++c) {
+      const LightView& v = views[frame.frame][c];
+      ASSERT_EQ(frame.pixels[c].has_value(), v.light && !(c == 1 && frame.frame == 4)) << frame.frame << " " << c;
+      if (frame.pixels[c]) {
+        EXPECT_LT((*frame.pixels[c] - v.pixel).norm(), 0.1);
+      }
+    }
+  EXPECT_THROW(tabletop_capture::detectLightInImages({"nocam"}, dir), std::runtime_error);
+  ASSERT_EQ(std::system(("rm -rf " + dir).c_str()), 0);
 }
 
 }  // namespace

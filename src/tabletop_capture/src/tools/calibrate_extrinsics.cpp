@@ -12,15 +12,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
-#include <map>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
-#include <opencv2/core/utility.hpp>
-#include <opencv2/imgcodecs.hpp>
 
-#include "tabletop_capture/calibration/light_blob.h"
+#include "tabletop_capture/calibration/light_images.h"
 #include "tabletop_capture/calibration/point_light_calibration.h"
 #include "tabletop_capture/rig_description.h"
 #include "tabletop_common/cli_args.h"
@@ -48,56 +45,6 @@ void usage() {
       "  --truth FILE            a simulated sequence's true rig: also print each camera's error\n"
       "                          after the similarity of the camera centres onto the true ones\n"
       "  --quiet                 no line per camera directory while reading\n");
-}
-
-std::string baseName(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-// Reads DIR/<camera>/*.png, detects the light, and numbers the instants by the sorted union of
-// the file names.
-LightTrack detectInImages(const tabletop_capture::RigDescription& rig, const std::string& dir,
-                          const tabletop_capture::LightBlobOptions& blob_options, bool quiet) {
-  std::vector<std::string> names;
-  for (const auto& c : rig.cameras) names.push_back(c.name);
-  std::vector<std::vector<std::string>> files(names.size());
-  std::vector<std::string> instants;
-  for (size_t c = 0; c < names.size(); ++c) {
-    std::vector<cv::String> found;
-    cv::glob(dir + "/" + names[c] + "/*.png", found, false);
-    files[c].assign(found.begin(), found.end());
-    std::sort(files[c].begin(), files[c].end());
-    for (const auto& f : files[c]) instants.push_back(baseName(f));
-  }
-  std::sort(instants.begin(), instants.end());
-  instants.erase(std::unique(instants.begin(), instants.end()), instants.end());
-  if (instants.empty()) throw std::runtime_error("no PNG image in " + dir + "/<camera name>/ for any camera of the rig");
-  std::map<std::string, int> frame_of;
-  for (size_t i = 0; i < instants.size(); ++i) frame_of[instants[i]] = static_cast<int>(i);
-  LightTrack track(names);
-  for (size_t c = 0; c < names.size(); ++c) {
-    std::map<std::string, int> rejected;
-    int detected = 0;
-    for (const auto& f : files[c]) {
-      const cv::Mat image = cv::imread(f, cv::IMREAD_ANYCOLOR);
-      if (image.empty()) throw std::runtime_error("cannot read " + f);
-      const auto blob = tabletop_capture::detectLightBlob(image, blob_options);
-      if (blob.found) {
-        track.add(frame_of[baseName(f)], static_cast<int>(c), blob.pixel);
-        ++detected;
-      } else {
-        ++rejected[blob.rejected.substr(0, blob.rejected.find(" ("))];
-      }
-    }
-    std::string why;
-    for (const auto& [reason, n] : rejected) why += (why.empty() ? "; none: " : ", ") + reason + " " + std::to_string(n);
-    if (!quiet || files[c].empty())
-      std::printf("[calibrate_extrinsics] %s: %zu images, light found in %d%s\n", names[c].c_str(), files[c].size(),
-                  detected, why.c_str());
-    std::fflush(stdout);
-  }
-  return track;
 }
 
 std::string report(const tabletop_capture::PointLightCalibration& r, const LightTrack& track) {
@@ -187,8 +134,20 @@ int main(int argc, char** argv) {
     const auto rig = tabletop_capture::loadRigYaml(rig_file);
     std::vector<std::string> names;
     for (const auto& c : rig.cameras) names.push_back(c.name);
-    const LightTrack track = images.empty() ? tabletop_capture::loadLightTrackCsv(detections, names)
-                                            : detectInImages(rig, images, blob_options, quiet);
+    const LightTrack track =
+        images.empty() ? tabletop_capture::loadLightTrackCsv(detections, names)
+                       : tabletop_capture::detectLightInImages(
+                             names, images, blob_options,
+                             [&](int c, const tabletop_capture::LightImagesCamera& s) {
+                               std::string why;
+                               for (const auto& [reason, n] : s.rejected)
+                                 why += (why.empty() ? "; none: " : ", ") + reason + " " + std::to_string(n);
+                               if (!quiet || s.images == 0)
+                                 std::printf("[calibrate_extrinsics] %s: %d images, light found in %d%s\n",
+                                             names[c].c_str(), s.images, s.found, why.c_str());
+                               std::fflush(stdout);
+                             })
+                             .track;
     const auto per_camera = track.detectionsPerCamera();
     std::printf("[calibrate_extrinsics] %zu cameras, %zu frames with a detection, %d seen by >= %d cameras\n",
                 names.size(), track.frames.size(), track.framesSeenBy(options.min_cameras_per_frame),
