@@ -33,8 +33,11 @@
 
 namespace tabletop_capture {
 
-// Input the calibration cannot work with: fewer than 3 cameras, no frame seen by 3 cameras, a
-// camera that cannot be connected to the others. what() says which and why.
+// Input the calibration cannot work with: fewer than 3 cameras, detections of other cameras
+// than the rig's, no frame seen by 3 cameras, a camera that never saw the light together with
+// two others, a camera that cannot be placed (too few light positions shared with the cameras
+// placed before it). what() says which camera and why. A camera is never left out silently:
+// a rig with one camera's pose missing or wrong would mislead every later stage.
 class PointLightCalibrationError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
