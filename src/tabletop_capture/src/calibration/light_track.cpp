@@ -44,7 +44,7 @@ std::string lightTrackToCsv(const LightTrack& track) {
   for (const auto& f : track.frames)
     for (size_t c = 0; c < f.pixels.size(); ++c)
       if (f.pixels[c]) {
-        std::snprintf(line, sizeof line, "%d,%s,%.4f,%.4f\n", f.frame, track.cameras[c].c_str(),
+        std::snprintf(line, sizeof line, "%d,%s,%.6f,%.6f\n", f.frame, track.cameras[c].c_str(),
                       f.pixels[c]->x(), f.pixels[c]->y());
         out += line;
       }
