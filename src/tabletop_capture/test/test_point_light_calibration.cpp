@@ -12,8 +12,9 @@
 // from the light, so 1 px is ~4.3 mrad (0.25 deg) or ~6.5 mm across at the light. A camera's pose
 // rests on a few hundred light positions spread over its whole view, each with kNoisePx of
 // noise: its position then carries ~6.5 mm x kNoisePx x ~(a geometry factor of a few) /
-// sqrt(N) ~ 0.2-0.5 mm and its orientation ~0.01 deg. The bars (2 mm, 0.2 deg, the issue's)
-// leave a margin of 4x or more; the mean reprojection error is ~1.25 x kNoisePx.
+// sqrt(N) ~ 0.3-1 mm and its orientation ~0.01-0.04 deg (over 12 seeds with outliers: at most
+// 1.04 mm, 0.041 deg). The bars (2 mm, 0.2 deg, the issue's) leave a margin of about 2x in
+// position, 5x in orientation; the mean reprojection error is ~1.1 x kNoisePx.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -102,13 +103,13 @@ PoseErrors compare(const PointLightCalibration& result, const Synthetic& s) {
   return e;
 }
 
+// `loose` (a camera index) gets `loose_position_m` instead of position_m.
 void expectWithin(const PoseErrors& e, const PointLightCalibration& r, double position_m, double rotation_deg,
-                  int skip = -1) {
+                  int loose = -1, double loose_position_m = 0) {
   for (size_t c = 0; c < e.position_m.size(); ++c) {
     std::printf("cam%zu: %.2f mm %.4f deg; %d inliers %d outliers, %.3f px RMS\n", c, e.position_m[c] * 1e3,
                 e.rotation_deg[c], r.cameras[c].inliers, r.cameras[c].outliers, r.cameras[c].rms_px);
-    if (static_cast<int>(c) == skip) continue;
-    EXPECT_LT(e.position_m[c], position_m) << "cam" << c;
+    EXPECT_LT(e.position_m[c], static_cast<int>(c) == loose ? loose_position_m : position_m) << "cam" << c;
     EXPECT_LT(e.rotation_deg[c], rotation_deg) << "cam" << c;
   }
   std::printf("mean reprojection error %.3f px, %d iterations\n", r.mean_error_px, r.iterations);
@@ -127,8 +128,9 @@ TEST(PointLightCalibration, RecoversTheDefaultRig) {
 }
 
 // 10 % of the detections are random pixels (a reflection, another lamp) and cam3 sees the light
-// in only 20 % of the frames (~80 positions instead of ~400: its errors grow by sqrt(5) ~ 2.2,
-// still well inside the bars).
+// in only 20 % of the frames: ~70 positions instead of ~360, so its errors grow by sqrt(5) ~ 2.2
+// over the others' (up to ~1 mm): it gets a position bar of 3.5 mm (over 12 seeds it reached
+// 0.6-2.3 mm; its orientation stayed within 0.07 deg, under the common 0.2 deg bar).
 TEST(PointLightCalibration, OutliersAndASparseCamera) {
   Faults faults;
   faults.outliers = 0.1;
@@ -136,7 +138,7 @@ TEST(PointLightCalibration, OutliersAndASparseCamera) {
   faults.sparse_fraction = 0.2;
   const Synthetic s = makeSynthetic(400, 2, faults);
   const PointLightCalibration r = calibrateFromPointLight(s.input, s.track);
-  expectWithin(compare(r, s), r, 0.002, 0.2);
+  expectWithin(compare(r, s), r, 0.002, 0.2, 3, 0.0035);
   for (size_t c = 0; c < r.cameras.size(); ++c) {
     // About 10 % rejected; a few good ones of frames whose other views were mostly wrong too.
     EXPECT_GT(r.cameras[c].outliers, 0.07 * r.cameras[c].observations) << "cam" << c;
