@@ -61,6 +61,10 @@ TEST(LightBlob, NothingWithoutALight) {
   const LightBlob blob = detectLightBlob(background(3));
   EXPECT_FALSE(blob.found);
   EXPECT_EQ(blob.rejected.rfind("too dark", 0), 0u) << blob.rejected;
+  cv::Mat hot = background(4);
+  hot.at<uint8_t>(100, 100) = 255;  // a hot pixel of the sensor
+  EXPECT_FALSE(detectLightBlob(hot).found);
+  EXPECT_EQ(detectLightBlob(hot).rejected.rfind("too small", 0), 0u) << detectLightBlob(hot).rejected;
 }
 
 TEST(LightBlob, RejectsLargeStreakyAndAmbiguousSpots) {

@@ -382,6 +382,12 @@ PointLightCalibration calibrateFromPointLight(const RigDescription& intrinsics, 
     if (changed == 0) break;
   }
 
+  if (progress) {
+    int outliers = 0;
+    for (const Observation& o : problem.observations) outliers += !o.inlier || !problem.triangulated[o.point];
+    progress(format("bundle adjustment done: %.0f solver iterations in all; %.0f of %.0f observations rejected as outliers",
+                    result.iterations, outliers, problem.observations.size()));
+  }
   result.gauge = chooseGauge(problem, intrinsics, options);
   result.rig = intrinsics;
   for (int c = 0; c < n; ++c) {

@@ -17,7 +17,7 @@ struct LightBlobOptions {
   // its own channel only).
   double min_threshold = 80;
   double threshold_fraction = 0.5;
-  int min_area = 1;    // pixels above the threshold; fewer: noise
+  int min_area = 2;    // pixels above the threshold; fewer: a hot pixel of the sensor
   int max_area = 400;  // more: a lamp, a window, a reflection on the desk, not the light
   // Smallest ratio of the spot's minor to its major axis (second moments); a streak or an edge
   // is thinner. Not checked below min_area_for_shape pixels (too few for a shape).
