@@ -21,7 +21,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <random>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "tabletop_capture/calibration/marker_alignment.h"
 #include "tabletop_capture/default_rig.h"
@@ -162,6 +167,35 @@ TEST(DeskMarkerSim, WrongIdLayoutWarns) {
   for (const auto& w : a.warnings) warned = warned || w.find("do not fit the layout") != std::string::npos;
   EXPECT_TRUE(warned);
   EXPECT_GT(a.fit_rms, 0.05);
+}
+
+// The two tools as a user runs them: render, align the stand-in for the point-light rig, compare
+// with the truth; then the errors a user meets (markers in one camera only, no images).
+TEST(DeskMarkerSim, CommandLineTools) {
+  const std::string dir = testing::TempDir() + "desk_marker_cli";
+  ASSERT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
+  const std::string render = std::string(RENDER_DESK_MARKER) + " --out " + dir + " --frames 2 > " + dir + ".log";
+  ASSERT_EQ(std::system(render.c_str()), 0) << render;
+  const std::string align = std::string(ALIGN_RIG_TO_MARKER) + " --rig " + dir + "/rig_up_to_similarity.yaml --images " +
+                            dir + " --marker-layout " + dir + "/marker_layout.yaml --out " + dir + "/rig.yaml --report " +
+                            dir + "/report.txt --layout-png " + dir + "/layout.png --truth " + dir + "/truth_rig.yaml";
+  ASSERT_EQ(std::system((align + " > " + dir + ".log").c_str()), 0) << align;
+  expectCamerasAt(tabletop_capture::loadRigYaml(dir + "/rig.yaml"), tabletop_capture::loadRigYaml(dir + "/truth_rig.yaml"),
+                  2.0, 0.2, "cli");
+  std::ifstream report(dir + "/report.txt");
+  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("cameras that saw a marker: 8 of 8"), std::string::npos) << text;
+  EXPECT_NE(text.find("warnings: none"), std::string::npos) << text;
+  EXPECT_FALSE(cv::imread(dir + "/layout.png").empty());
+  // Only cam0's images left: exit 1 and the reason.
+  for (int c = 1; c < 8; ++c) ASSERT_EQ(std::system(("rm -rf '" + dir + "/cam" + std::to_string(c) + "'").c_str()), 0);
+  EXPECT_NE(std::system((align + " > " + dir + ".log 2> " + dir + ".err").c_str()), 0);
+  std::ifstream err(dir + ".err");
+  const std::string why((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+  EXPECT_NE(why.find("found in 1 camera(s) (cam0)"), std::string::npos) << why;
+  EXPECT_NE(std::system((std::string(ALIGN_RIG_TO_MARKER) + " --rig " + dir + "/truth_rig.yaml --images " + dir +
+                         "/nothing --out " + dir + "/x.yaml > /dev/null 2>&1").c_str()), 0);
+  EXPECT_EQ(std::system(("rm -rf '" + dir + "' '" + dir + ".log' '" + dir + ".err'").c_str()), 0);
 }
 
 }  // namespace

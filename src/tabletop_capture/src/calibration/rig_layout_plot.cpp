@@ -55,6 +55,9 @@ cv::Mat drawRigLayout(const RigDescription& rig, const RigLayoutPlotOptions& o) 
   cv::rectangle(img, top(wl), top(Eigen::Vector3d(wh.x(), wh.y(), 0)), grey, 1, cv::LINE_AA);
   cv::rectangle(img, side(wl), side(Eigen::Vector3d(wh.x(), 0, wh.z())), grey, 1, cv::LINE_AA);
   cv::line(img, side(Eigen::Vector3d(lo.x(), 0, 0)), side(Eigen::Vector3d(hi.x(), 0, 0)), {90, 90, 90}, 2);
+  // Where the user sits (DESIGN.md section 3: y points from the user towards the screen).
+  cv::putText(img, "user", top(Eigen::Vector3d(mid.x(), wl.y(), 0)) + cv::Point2d(-16, 18), font, 0.45,
+              {100, 100, 100}, 1, cv::LINE_AA);
   // World axes at the origin (x red, y green, z blue as in rviz).
   const double ax = 0.1;
   cv::arrowedLine(img, top({0, 0, 0}), top({ax, 0, 0}), {0, 0, 255}, 2, cv::LINE_AA, 0, 0.25);
@@ -80,7 +83,10 @@ cv::Mat drawRigLayout(const RigDescription& rig, const RigLayoutPlotOptions& o) 
       const cv::Point2d q = view ? side(tip) : top(tip);
       cv::arrowedLine(img, p, q, col, 2, cv::LINE_AA, 0, 0.15);
       cv::circle(img, p, 6, col, cv::FILLED, cv::LINE_AA);
-      cv::putText(img, c.name, p + cv::Point2d(8, -8), font, 0.45, col, 1, cv::LINE_AA);
+      // Label right of the disc, or left of it near the panel's right edge.
+      const double right_edge = view ? o.width : panel_w;
+      const cv::Point2d at = p.x + 60 > right_edge ? p + cv::Point2d(-58, -8) : p + cv::Point2d(8, -8);
+      cv::putText(img, c.name, at, font, 0.45, col, 1, cv::LINE_AA);
     }
   }
   char scale[64];
