@@ -69,6 +69,12 @@ TEST(MarkerLayout, YamlRoundTripAndValidation) {
   EXPECT_THROW(parseMarkerLayoutYaml("markers: [{id: 1, x: 0, y: 0}]", "t"), std::runtime_error);
 }
 
+// The shipped file (what a user prints and edits) is the built-in default.
+TEST(MarkerLayout, ConfigFileIsTheDefault) {
+  const MarkerLayout f = loadMarkerLayoutYaml(TABLETOP_CAPTURE_CONFIG_DIR "/desk_marker_layout.yaml");
+  EXPECT_EQ(markerLayoutToYaml(f), markerLayoutToYaml(defaultMarkerLayout()));
+}
+
 TEST(Triangulation, ExactPixelsGiveThePoint) {
   const RigDescription rig = makeDefaultRig();
   const Eigen::Vector3d X(0.21, -0.13, 0.05);
@@ -186,7 +192,10 @@ TEST(RigLayoutPlot, DrawsEveryCameraInBothViews) {
     EXPECT_GT(left, 60) << rig.cameras[i].name;
     EXPECT_GT(right, 20) << rig.cameras[i].name;  // side view: discs may overlap
   }
-  EXPECT_THROW(drawRigLayout(rig, RigLayoutPlotOptions{100, 50}), std::invalid_argument);
+  RigLayoutPlotOptions tiny;
+  tiny.width = 100;
+  tiny.height = 50;
+  EXPECT_THROW(drawRigLayout(rig, tiny), std::invalid_argument);
 }
 
 }  // namespace

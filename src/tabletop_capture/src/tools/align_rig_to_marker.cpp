@@ -17,6 +17,7 @@
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "tabletop_capture/calibration/marker_alignment.h"
 #include "tabletop_capture/calibration/rig_layout_plot.h"
@@ -37,6 +38,8 @@ void usage() {
       "  --report FILE        also write the report there\n"
       "  --layout-png FILE    a top and side view of the aligned rig\n"
       "  --truth FILE         the true rig (simulation): also report each camera's error\n"
+      "  --print-markers DIR  only write the layout's markers to print, DIR/marker_<id>.png (100 px\n"
+      "                       per cell, a white margin of one cell), and DIR/marker_layout.yaml\n"
       "  --quiet              no line per camera\n");
 }
 
@@ -49,7 +52,7 @@ std::string fmt(const char* f, double a = 0, double b = 0, double c = 0, double 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string rig_file, images, out, layout_file, report_file, png_file, truth_file;
+  std::string rig_file, images, out, layout_file, report_file, png_file, truth_file, print_dir;
   double single = 0;
   bool quiet = false;
   tabletop_common::CliArgs args("align_rig_to_marker", argc, argv, usage);
@@ -62,6 +65,7 @@ int main(int argc, char** argv) {
     else if (args.is("--report")) report_file = args.text();
     else if (args.is("--layout-png")) png_file = args.text();
     else if (args.is("--truth")) truth_file = args.text();
+    else if (args.is("--print-markers")) print_dir = args.text();
     else if (args.is("--quiet")) quiet = true;
     else if (args.help()) {
       usage();
@@ -70,9 +74,28 @@ int main(int argc, char** argv) {
       args.unknown();
     }
   }
-  if (rig_file.empty() || images.empty() || out.empty()) args.fail("--rig, --images and --out are required");
+  if (print_dir.empty() && (rig_file.empty() || images.empty() || out.empty()))
+    args.fail("--rig, --images and --out are required");
   try {
     using namespace tabletop_capture;
+    if (!print_dir.empty()) {
+      MarkerLayout layout = layout_file.empty() ? defaultMarkerLayout() : loadMarkerLayoutYaml(layout_file);
+      if (single > 0) layout.markers = {{0, single, Eigen::Vector2d::Zero()}};
+      layout.validate();
+      std::filesystem::create_directories(print_dir);
+      for (const auto& m : layout.markers) {
+        const cv::Mat cells = markerCells(layout.dictionary, m.id);
+        cv::Mat sheet(cells.rows + 2, cells.cols + 2, CV_8UC1, cv::Scalar(255)), big;
+        cells.copyTo(sheet(cv::Rect(1, 1, cells.cols, cells.rows)));
+        cv::resize(sheet, big, cv::Size(), 100, 100, cv::INTER_NEAREST);
+        const std::string f = print_dir + "/marker_" + std::to_string(m.id) + ".png";
+        if (!cv::imwrite(f, big)) throw std::runtime_error("cannot write " + f);
+        std::printf("[align_rig_to_marker] %s: print its black square %.1f mm wide, lay it at (%.3f, %.3f) m, "
+                    "its top edge away from the user\n", f.c_str(), m.size * 1e3, m.centre.x(), m.centre.y());
+      }
+      std::ofstream(print_dir + "/marker_layout.yaml") << markerLayoutToYaml(layout);
+      return 0;
+    }
     const RigDescription rig = loadRigYaml(rig_file);
     MarkerLayout layout = layout_file.empty() ? defaultMarkerLayout() : loadMarkerLayoutYaml(layout_file);
     if (single > 0) layout.markers = {{0, single, Eigen::Vector2d::Zero()}};
