@@ -58,8 +58,8 @@ TEST(MarkerLayout, YamlRoundTripAndValidation) {
   }
   // Corners: ArUco's order seen from above (top-left first, clockwise), on the desk.
   const auto c = l.corners(0);
-  EXPECT_TRUE(c[0].isApprox(Eigen::Vector3d(-0.09, 0.09, 0)));
-  EXPECT_TRUE(c[2].isApprox(Eigen::Vector3d(0.09, -0.09, 0)));
+  EXPECT_TRUE(c[0].isApprox(Eigen::Vector3d(-0.075, 0.075, 0)));
+  EXPECT_TRUE(c[2].isApprox(Eigen::Vector3d(0.075, -0.075, 0)));
   EXPECT_THROW(parseMarkerLayoutYaml("dictionary: DICT_9X9\nmarkers: [{id: 0, size: 0.1, x: 0, y: 0}]", "t"),
                std::runtime_error);
   EXPECT_THROW(parseMarkerLayoutYaml("markers: [{id: 0, size: 0.1, x: 0, y: 0}, {id: 1, size: 0.1, x: 0.05, y: 0}]",
@@ -93,9 +93,9 @@ TEST(Triangulation, ExactPixelsGiveThePoint) {
   EXPECT_FALSE(triangulatePoint({cams[0]}, {px[0]}).ok);  // one camera: no depth
 }
 
-// Bar of the issue: every camera within 2 mm and 0.2 deg. The corner noise is the detector's
-// measured error on the rendered images (test_desk_marker_sim: 0.14 px RMS per corner, both axes
-// together, i.e. 0.1 px per axis); 3 random similarities.
+// Bar of the issue: every camera within 2 mm and 0.2 deg. The corner noise is 0.1 px per axis
+// (0.14 px RMS per corner), nearly twice the detector's measured error on the rendered images
+// (test_desk_marker_sim: 0.08 px RMS per corner): room for real images; 3 random similarities.
 TEST(MarkerAlignment, SyntheticCornersWithDetectionNoise) {
   const RigDescription truth = makeDefaultRig();
   const MarkerLayout layout = defaultMarkerLayout();
@@ -141,7 +141,7 @@ TEST(MarkerAlignment, OneWrongMarkerSizeWarns) {
   const RigDescription truth = makeDefaultRig();
   const MarkerLayout layout = defaultMarkerLayout();
   MarkerLayout wrong = layout;
-  wrong.markers[2].size = 0.15;
+  wrong.markers[2].size = 0.13;
   const auto a = alignRigToMarkers(disturbed(truth, 4), project(truth, layout, 0.05, 4), wrong);
   bool named = false;
   for (const auto& w : a.warnings) named = named || w.find("marker id 2 measures") != std::string::npos;

@@ -39,7 +39,7 @@ DeskMarkerRenderer::DeskMarkerRenderer(const tabletop_capture::CameraModel& came
               // a = along x, b = down (-y), in cells.
               const double h = mk.size / 2;
               const double a = p.x() - (mk.centre.x() - h), b = (mk.centre.y() + h) - p.y();
-              const double margin = options_.paper_margin;
+              const double margin = options_.paper_margin_cells * mk.size / cells[m].rows;
               if (a < -margin || b < -margin || a >= mk.size + margin || b >= mk.size + margin) continue;
               level = options_.paper;
               if (a >= 0 && b >= 0 && a < mk.size && b < mk.size) {

@@ -85,7 +85,7 @@ MarkerLayout MarkerLayout::scaled(double factor) const {
 MarkerLayout defaultMarkerLayout() {
   MarkerLayout l;
   l.dictionary = "DICT_4X4_50";
-  const double s = 0.18;
+  const double s = 0.15;
   l.markers = {{0, s, {0.0, 0.0}}, {1, s, {-0.35, -0.3}}, {2, s, {0.35, -0.3}},
                {3, s, {0.35, 0.3}}, {4, s, {-0.35, 0.3}}};
   return l;

@@ -33,7 +33,7 @@ void usage() {
       "                       the corners are averaged over each camera's images)\n"
       "  --out FILE           the rig YAML in the world frame to write\n"
       "  --marker-layout FILE markers on the desk (YAML: dictionary, markers [{id, size, x, y}];\n"
-      "                       default: five 180 mm DICT_4X4_50 markers, docs/calibration.md)\n"
+      "                       default: five 150 mm DICT_4X4_50 markers, docs/calibration.md)\n"
       "  --marker-size M      one marker, id 0, of this size at the origin instead\n"
       "  --report FILE        also write the report there\n"
       "  --layout-png FILE    a top and side view of the aligned rig\n"

@@ -18,7 +18,9 @@ namespace tabletop_sim {
 struct DeskMarkerImageOptions {
   int supersample = 4;          // samples per pixel along each axis
   double noise_sigma = 2.0;     // sensor noise (grey levels), as the rig's default
-  double paper_margin = 0.02;   // m of white paper around each marker's black square
+  // White paper around each marker's black square, in marker cells (one cell: the quiet zone
+  // ArUco needs; with less the sheet's own outline can pass for the marker's).
+  double paper_margin_cells = 1.0;
   double desk_half_x = 0.8, desk_half_y = 0.6;  // the desk top, centred on the world origin (m)
   std::uint8_t black = 30, paper = 220, desk = 125, room = 70;  // grey levels
 };

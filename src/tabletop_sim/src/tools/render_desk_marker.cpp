@@ -30,10 +30,11 @@ void usage() {
       "  --frames N           images per camera (default 8; only the noise differs)\n"
       "  --seed S             noise (default 1)\n"
       "  --rig FILE           the true rig (default: the simulated default rig)\n"
-      "  --marker-layout FILE markers on the desk (default: five 180 mm DICT_4X4_50 markers,\n"
+      "  --marker-layout FILE markers on the desk (default: five 150 mm DICT_4X4_50 markers,\n"
       "                       tabletop_capture/calibration/marker_layout.h)\n"
       "  --marker-size M      one marker of this size at the origin instead (id 0)\n"
-      "  --noise S            sensor noise, grey levels (default 2)\n");
+      "  --noise S            sensor noise, grey levels (default 2)\n"
+      "  --paper-margin C     white paper around each marker, in marker cells (default 1)\n");
 }
 }  // namespace
 
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
     else if (args.is("--marker-layout")) layout_file = args.text();
     else if (args.is("--marker-size")) single = args.number(0.01, 2.0);
     else if (args.is("--noise")) options.noise_sigma = args.number(0, 50);
+    else if (args.is("--paper-margin")) options.paper_margin_cells = args.number(0, 10);
     else if (args.help()) {
       usage();
       return 0;

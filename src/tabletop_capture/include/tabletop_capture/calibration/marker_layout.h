@@ -17,7 +17,7 @@ namespace tabletop_capture {
 
 struct DeskMarker {
   int id = 0;
-  double size = 0.18;                          // edge of the black square (m), border included
+  double size = 0.15;                          // edge of the black square (m), border included
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // on the desk (world x, y; m)
 };
 
@@ -37,13 +37,14 @@ struct MarkerLayout {
   MarkerLayout scaled(double factor) const;
 };
 
-// Five 180 mm markers of DICT_4X4_50 (one per A4 sheet): id 0 at the desk centre (the world
-// origin), ids 1-4 at (-+0.35, -+0.3) (1 front left, 2 front right, 3 back right, 4 back left).
-// A board spread over the desk fixes the world's tilt and the scale from the markers' spacing,
-// not only from the edge of one small marker (docs/calibration.md has the figures).
+// Five 150 mm markers of DICT_4X4_50, one per A4 sheet (its 25 mm cells leave the one-cell
+// white quiet zone on the sheet): id 0 at the desk centre (the world origin), ids 1-4 at
+// (-+0.35, -+0.3) (1 front left, 2 front right, 3 back right, 4 back left). A board spread over
+// the desk fixes the world's tilt and the scale from the markers' spacing, not from the edge of
+// one small marker (docs/calibration.md has the figures: one 180 mm marker misses the bar).
 MarkerLayout defaultMarkerLayout();
 
-// YAML: "dictionary: DICT_4X4_50" and "markers: [{id: 0, size: 0.18, x: 0.0, y: 0.0}, ...]".
+// YAML: "dictionary: DICT_4X4_50" and "markers: [{id: 0, size: 0.15, x: 0.0, y: 0.0}, ...]".
 // Throws std::runtime_error naming the source and the field.
 MarkerLayout parseMarkerLayoutYaml(const std::string& text, const std::string& source);
 MarkerLayout loadMarkerLayoutYaml(const std::string& path);
