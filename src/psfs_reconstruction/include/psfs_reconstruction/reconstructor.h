@@ -193,8 +193,9 @@ class Reconstructor {
   LearningVerdict checkLearningFrame(const std::vector<cv::Mat>& rgb,
                                      std::vector<std::string>* warnings);
   LearningVerdict skipLearningFrame(const std::string& why, std::vector<std::string>* warnings);
+  // with_skin false: the body volume only (r->skin left empty), for the relearn check.
   void fuseWorkspace(const std::vector<cv::Mat>& rgb, const std::vector<BackgroundModel>& backgrounds,
-                     FrameResult* r);
+                     FrameResult* r, bool with_skin = true);
   double occupiedLitresAgainstPrevious(const std::vector<cv::Mat>& rgb);
 
   ReconstructorParams params_;
