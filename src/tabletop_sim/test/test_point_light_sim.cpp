@@ -2,13 +2,18 @@
 // waved through the workspace (tabletop_sim/point_light.h), rendered as each camera of the
 // default rig sees it, found in the images (calibration/light_blob.h), the rig calibrated from
 // those detections (calibration/point_light_calibration.h) and compared with the true rig.
-// Also measures the blob detector's error against the true projection: the noise the
-// synthetic tests of tabletop_capture (test_point_light_calibration) assume.
+// Also measures the blob detector's error against the true projection (the noise the synthetic
+// tests of tabletop_capture, test_point_light_calibration, assume), and runs the two commands.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -17,6 +22,7 @@
 #include "tabletop_capture/calibration/light_images.h"
 #include "tabletop_capture/calibration/point_light_calibration.h"
 #include "tabletop_capture/default_rig.h"
+#include "tabletop_capture/rig_description.h"
 #include "tabletop_sim/point_light.h"
 
 namespace tabletop_sim {
@@ -186,6 +192,50 @@ TEST(PointLightSim, DetectsTheLightInImageFiles) {
     }
   EXPECT_THROW(tabletop_capture::detectLightInImages({"nocam"}, dir), std::runtime_error);
   ASSERT_EQ(std::system(("rm -rf " + dir).c_str()), 0);
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The two commands end to end: render_point_light's sequence, calibrate_extrinsics from its
+// images (the report, --truth, the detections saved), again from the saved detections (the
+// same rig: the CSV keeps 1e-6 px), and the exit status 1 with the reason for impossible input.
+TEST(PointLightSim, CommandLineTools) {
+  char dir_template[] = "/tmp/test_point_light_cli_XXXXXX";
+  const std::string dir = mkdtemp(dir_template);
+  const std::string render = std::string(RENDER_POINT_LIGHT) + " --out " + dir + " --frames 150 --step 0.04 --outliers 0.05 > " + dir + "/render.log";
+  ASSERT_EQ(std::system(render.c_str()), 0) << render;
+  const std::string calibrate = std::string(CALIBRATE_EXTRINSICS) + " --rig " + dir + "/intrinsics_rig.yaml --out " + dir + "/rig.yaml";
+  const std::string from_images = calibrate + " --images " + dir + " --report " + dir + "/report.txt --save-detections " +
+                                  dir + "/light.csv --truth " + dir + "/truth_rig.yaml --quiet > " + dir + "/calibrate.log";
+  ASSERT_EQ(std::system(from_images.c_str()), 0) << from_images << "\n" << readFile(dir + "/calibrate.log");
+  const std::string report = readFile(dir + "/report.txt");
+  EXPECT_NE(report.find("150 used (seen by >= 3 cameras)"), std::string::npos) << report;
+  EXPECT_NE(report.find("against the truth"), std::string::npos) << report;
+  const std::string log = readFile(dir + "/calibrate.log");
+  EXPECT_NE(log.find("init: "), std::string::npos) << log;
+  EXPECT_NE(log.find("bundle adjustment done"), std::string::npos) << log;
+  const auto truth = tabletop_capture::loadRigYaml(dir + "/truth_rig.yaml");
+  const auto rig = tabletop_capture::loadRigYaml(dir + "/rig.yaml");
+  ASSERT_EQ(rig.cameras.size(), truth.cameras.size());
+  EXPECT_LT((rig.cameras[0].world_T_camera.matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-12);  // no input poses
+  EXPECT_EQ(rig.cameras[3].fx, truth.cameras[3].fx);  // intrinsics unchanged
+  ASSERT_EQ(std::system((calibrate + "2 --detections " + dir + "/light.csv > /dev/null").c_str()), 0);
+  const auto again = tabletop_capture::loadRigYaml(dir + "/rig.yaml2");
+  for (size_t c = 0; c < rig.cameras.size(); ++c)
+    EXPECT_LT((again.cameras[c].world_T_camera.matrix() - rig.cameras[c].world_T_camera.matrix()).norm(), 1e-6);
+  // Impossible input: exit status 1 and the reason.
+  ASSERT_EQ(std::system(("grep -v cam5 " + dir + "/light.csv > " + dir + "/no_cam5.csv").c_str()), 0);
+  EXPECT_EQ(WEXITSTATUS(std::system((calibrate + " --detections " + dir + "/no_cam5.csv > /dev/null 2> " + dir + "/err.txt").c_str())), 1);
+  EXPECT_NE(readFile(dir + "/err.txt").find("cam5 never saw the light"), std::string::npos) << readFile(dir + "/err.txt");
+  EXPECT_EQ(WEXITSTATUS(std::system((calibrate + " --images " + dir + "/nothing 2> " + dir + "/err.txt > /dev/null").c_str())), 1);
+  EXPECT_NE(readFile(dir + "/err.txt").find("no PNG image"), std::string::npos);
+  EXPECT_EQ(WEXITSTATUS(std::system((calibrate + " 2> /dev/null").c_str())), 2);  // neither --images nor --detections
+  ASSERT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
 
 }  // namespace
