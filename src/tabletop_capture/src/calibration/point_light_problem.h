@@ -3,11 +3,14 @@
 // camera), the frame being that of the first camera placed until the gauge is chosen.
 #pragma once
 
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "tabletop_capture/calibration/point_light_calibration.h"
 #include "tabletop_capture/camera_model.h"
 
 namespace tabletop_capture {
@@ -51,6 +54,24 @@ struct BundleOptions {
   int fixed = 0;
 };
 int bundleAdjust(Problem& problem, const BundleOptions& options);
+
+// Triangulates every point seen by >= 2 placed cameras (triangulatePoint); returns how many.
+int triangulateAll(Problem& problem, double threshold_px);
+// Places the first two cameras (the first one fixed: *fixed) and triangulates their points.
+// Throws PointLightCalibrationError if no pair agrees on a relative pose.
+void initialisePair(Problem& problem, const PointLightCalibrationOptions& options,
+                    const PointLightProgress& progress, int* fixed);
+// Places the unplaced camera that sees most triangulated points by PnP (RANSAC). Throws
+// PointLightCalibrationError naming it if it sees too few.
+void placeNextCamera(Problem& problem, const PointLightCalibrationOptions& options,
+                     const PointLightProgress& progress);
+
+// printf into a string, for the progress lines and warnings (numbers as doubles: %.0f, %.3f).
+inline std::string format(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0) {
+  char text[256];
+  std::snprintf(text, sizeof text, fmt, a, b, c, d);
+  return text;
+}
 
 }  // namespace point_light
 }  // namespace tabletop_capture
