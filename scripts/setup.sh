@@ -24,6 +24,7 @@ PACKAGES=(
   libmessage-filters-dev librosbag-dev libdiagnostic-updater-dev libvisualization-msgs-dev
   libstd-srvs-dev libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libpcl-dev libpcl-conversions-dev libopencv-dev libopencv-contrib-dev libeigen3-dev libyaml-cpp-dev
+  libceres-dev
   libgtest-dev libbenchmark-dev libzstd-dev libboost-dev libssl-dev libhwy-dev nlohmann-json3-dev
   rviz xvfb x11-apps imagemagick libgl1-mesa-dri
   chromium
