@@ -10,11 +10,9 @@
 #include <cstdio>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "tabletop_capture/rig_description.h"
 #include "tabletop_common/cli_args.h"
+#include "tabletop_sim/camera_image_folders.h"
 #include "tabletop_sim/simulated_rig.h"
 
 namespace {
@@ -55,19 +53,11 @@ int main(int argc, char** argv) {
   try {
     const tabletop_sim::SimulatedRig sim(options);
     const auto& rig = sim.rig();
-    for (const auto& cam : rig.cameras)
-      if (std::system(("mkdir -p '" + out + "/" + cam.name + "'").c_str()) != 0)
-        throw std::runtime_error("cannot create " + out + "/" + cam.name);
+    tabletop_sim::makeCameraFolders(out, rig);
     for (int f = 0; f < frames; ++f) {
       const tabletop_sim::SimFrame frame = sim.render(f);
-      for (size_t c = 0; c < rig.cameras.size(); ++c) {
-        cv::Mat bgr;
-        cv::cvtColor(frame.images[c], bgr, cv::COLOR_RGB2BGR);
-        char name[64];
-        std::snprintf(name, sizeof name, "/%05d.png", f);
-        const std::string path = out + "/" + rig.cameras[c].name + name;
-        if (!cv::imwrite(path, bgr)) throw std::runtime_error("cannot write " + path);
-      }
+      for (size_t c = 0; c < rig.cameras.size(); ++c)
+        tabletop_sim::writeCameraImage(out, rig.cameras[c].name, f, frame.images[c]);
       if ((f + 1) % 20 == 0 || f + 1 == frames)
         std::printf("[render_camera_images] %d/%d frames\n", f + 1, frames);
     }

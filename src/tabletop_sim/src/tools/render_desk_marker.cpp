@@ -12,14 +12,12 @@
 #include <fstream>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "tabletop_capture/calibration/marker_alignment.h"
 #include "tabletop_capture/calibration/marker_layout.h"
 #include "tabletop_capture/default_rig.h"
 #include "tabletop_capture/rig_description.h"
 #include "tabletop_common/cli_args.h"
+#include "tabletop_sim/camera_image_folders.h"
 #include "tabletop_sim/desk_marker.h"
 
 namespace {
@@ -68,18 +66,12 @@ int main(int argc, char** argv) {
                                       : tabletop_capture::loadMarkerLayoutYaml(layout_file);
     if (single > 0) layout.markers = {{0, single, Eigen::Vector2d::Zero()}};
     layout.validate();
+    tabletop_sim::makeCameraFolders(out, rig);
     for (const auto& cam : rig.cameras) {
-      const std::string dir = out + "/" + cam.name;
-      if (std::system(("mkdir -p '" + dir + "'").c_str()) != 0) throw std::runtime_error("cannot create " + dir);
       const tabletop_sim::DeskMarkerRenderer renderer(cam, layout, options);
-      for (int f = 0; f < frames; ++f) {
-        cv::Mat bgr;
-        cv::cvtColor(renderer.render(std::uint64_t(seed) * 1000003 + 1000 * f + rig.findCamera(cam.name)), bgr,
-                     cv::COLOR_RGB2BGR);
-        char name[32];
-        std::snprintf(name, sizeof name, "/%05d.png", f);
-        if (!cv::imwrite(dir + name, bgr)) throw std::runtime_error("cannot write " + dir + name);
-      }
+      for (int f = 0; f < frames; ++f)
+        tabletop_sim::writeCameraImage(
+            out, cam.name, f, renderer.render(std::uint64_t(seed) * 1000003 + 1000 * f + rig.findCamera(cam.name)));
       std::printf("[render_desk_marker] %s: %d images\n", cam.name.c_str(), frames);
       std::fflush(stdout);
     }

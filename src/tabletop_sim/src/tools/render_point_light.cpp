@@ -11,12 +11,10 @@
 #include <random>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "tabletop_capture/default_rig.h"
 #include "tabletop_capture/rig_description.h"
 #include "tabletop_common/cli_args.h"
+#include "tabletop_sim/camera_image_folders.h"
 #include "tabletop_sim/point_light.h"
 
 namespace {
@@ -82,19 +80,14 @@ int main(int argc, char** argv) {
     const Eigen::AlignedBox3d box(Eigen::Vector3d(-0.5, -0.5, 0.0), Eigen::Vector3d(0.5, 0.5, 0.75));
     const auto path = tabletop_sim::randomLightPath(box, frames, seed, step);
     const auto views = tabletop_sim::planLightSequence(rig, path, faults, seed + 1);
-    for (const auto& cam : rig.cameras)
-      if (std::system(("mkdir -p '" + out + "/" + cam.name + "'").c_str()) != 0)
-        throw std::runtime_error("cannot create " + out + "/" + cam.name);
+    tabletop_sim::makeCameraFolders(out, rig);
     std::vector<int> lit(rig.cameras.size(), 0);
     for (int f = 0; f < frames; ++f) {
       for (size_t c = 0; c < rig.cameras.size(); ++c) {
         const auto& cam = rig.cameras[c];
-        cv::Mat bgr;
-        cv::cvtColor(tabletop_sim::renderLightView(cam, views[f][c], image_options, (seed * 1000003ull + f) * 16 + c), bgr,
-                     cv::COLOR_RGB2BGR);
-        char name[64];
-        std::snprintf(name, sizeof name, "/%s/%05d.png", cam.name.c_str(), f);
-        if (!cv::imwrite(out + name, bgr)) throw std::runtime_error("cannot write " + out + name);
+        tabletop_sim::writeCameraImage(
+            out, cam.name, f,
+            tabletop_sim::renderLightView(cam, views[f][c], image_options, (seed * 1000003ull + f) * 16 + c));
         lit[c] += views[f][c].light;
       }
       if ((f + 1) % 100 == 0 || f + 1 == frames)
