@@ -20,6 +20,7 @@ cvephands::ScenarioEvalOptions shortRun() {
   o.mesh_every = 10;  // person frames 0, 10, 20: both hands each time
   o.psfs_config = CVEPHANDS_PSFS_CONFIG;
   o.mpf_config = CVEPHANDS_MPF_CONFIG;
+  o.papf_config = CVEPHANDS_PAPF_CONFIG;
   return o;
 }
 
@@ -117,6 +118,75 @@ TEST(ScenarioEvaluationSim, SameOptionsGiveTheSameFiguresAndMeshingChangesNothin
   EXPECT_EQ(a.headErrorMeanMm(), b.headErrorMeanMm());
   EXPECT_TRUE(b.meshes.empty());
   EXPECT_EQ(b.mesh_to_truth_mm.count(), 0u);
+  // The PAPF sees the same volumes with the same seed: the same poses.
+  ASSERT_TRUE(a.body.ran && b.body.ran);
+  EXPECT_EQ(a.body.tracked_frames, b.body.tracked_frames);
+  EXPECT_EQ(a.body.starts, b.body.starts);
+  EXPECT_EQ(a.body.hand_mm.mean(), b.body.hand_mm.mean());
+  EXPECT_EQ(a.body.head_mm.mean(), b.body.head_mm.mean());
+  EXPECT_EQ(a.body.elbow_mm.mean(), b.body.elbow_mm.mean());
+}
+
+// The PAPF in the evaluation: 20 person frames of reach_targets in short sleeves (the sequence
+// body_tracking's test_papf_sim scores: 22 / 12.5 / 36 / 35 mm mean for hands, head, elbows,
+// shoulders over the whole script), after 2 scored empty frames. Bounds are physical, not
+// today's figures (the PAPF generalises poorly elsewhere; these guard against a broken link):
+//  * the PAPF works on the 16 mm volumes downsampled 2x (32 mm voxels) and starts with the head
+//    at the top of the body volume; the simulated head ellipsoid's largest semi-axis is about
+//    0.1 m, so an estimate centred anywhere on the head is within ~100 mm of its centre: beyond
+//    that the head estimate is off the head (head < 100 mm);
+//  * a shoulder estimate on the correct side of the trunk is within half the shoulder span
+//    (about 0.4 m / 2) of the true joint: shoulders < 200 mm;
+//  * upper arm + forearm are about 0.55 m: an elbow or hand estimate on the right arm's side of
+//    its shoulder is within that of the truth; 300 mm leaves it half an arm off (elbows, hands
+//    < 300 mm). A hand folded into the trunk on this short run would already break the hands
+//    bound;
+//  * the person sits there from the first person frame and the PAPF starts by itself on the
+//    first volume with a person: one start, no loss, no pose in the empty scene.
+TEST(ScenarioEvaluationSim, PapfOnTheSameVolumesGivesFiniteBodyErrorsWithinPhysicalBounds) {
+  cvephands::ScenarioEvalOptions o = shortRun();
+  o.scenario = "short_sleeves";
+  o.script = "reach_targets";
+  o.empty_frames = 2;
+  o.frames = 20;
+  o.mesh_every = 0;
+  const cvephands::ScenarioEvalResult r = cvephands::evaluateScenario(o);
+  std::printf("[ figures ] %s", r.bodySummary().c_str());
+  const cvephands::BodyTrackingFigures& b = r.body;
+  ASSERT_TRUE(b.ran);
+  EXPECT_EQ(b.person_frames, 20);
+  EXPECT_EQ(b.starts, 1);
+  EXPECT_EQ(b.restarts(), 0);
+  EXPECT_EQ(b.losses, 0);
+  EXPECT_EQ(b.empty_tracked_frames, 0);
+  EXPECT_GE(b.tracked_frames, 19);  // started on the first (at worst the second) person frame
+  EXPECT_NEAR(b.trackedFraction(), double(b.tracked_frames) / 20.0, 1e-12);
+  ASSERT_GT(b.head_mm.count(), 0u);
+  for (const auto* s : {&b.hand_mm, &b.head_mm, &b.elbow_mm, &b.shoulder_mm})
+    EXPECT_TRUE(std::isfinite(b.meanMm(*s)));
+  EXPECT_LT(b.meanMm(b.head_mm), 100.0);
+  EXPECT_LT(b.meanMm(b.shoulder_mm), 200.0);
+  EXPECT_LT(b.meanMm(b.elbow_mm), 300.0);
+  EXPECT_LT(b.meanMm(b.hand_mm), 300.0);
+  EXPECT_EQ(b.hand_mm.count(), 2u * b.tracked_frames);  // both hands in the workspace
+  // Per frame: the tracked person frames carry errors, the others NaN.
+  int tracked = 0;
+  for (const auto& f : r.frames) {
+    tracked += f.person && f.body_tracking;
+    EXPECT_EQ(std::isfinite(f.body_head_mm), f.person && f.body_tracking) << "frame " << f.frame;
+  }
+  EXPECT_EQ(tracked, b.tracked_frames);
+
+  // Without the PAPF: nothing of it, and the rest unchanged (it only reads the volumes).
+  o.body = false;
+  const cvephands::ScenarioEvalResult n = cvephands::evaluateScenario(o);
+  EXPECT_FALSE(n.body.ran);
+  EXPECT_TRUE(std::isnan(n.body.trackedFraction()));
+  EXPECT_TRUE(std::isnan(n.body.meanMm(n.body.head_mm)));
+  EXPECT_EQ(n.handErrorMeanMm(0), r.handErrorMeanMm(0));
+  EXPECT_EQ(n.headErrorMeanMm(), r.headErrorMeanMm());
+  EXPECT_EQ(n.body_iou.mean(), r.body_iou.mean());
+  EXPECT_NE(n.summary().find("PAPF: off"), std::string::npos);
 }
 
 TEST(ScenarioEvaluationSim, UnknownScenarioOrBadOptionsThrowInvalidArgument) {

@@ -1,5 +1,5 @@
 // The scenario_suite tool end to end: the CI subset (--quick) against the regression guards
-// writes its report and plots and exits 0; a scenario that cannot run is reported, the others
+// writes its report and plots (the PAPF's section and plot included) and exits 0; a scenario that cannot run is reported, the others
 // still run, and the exit status says so.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -74,12 +74,18 @@ TEST(ScenarioSuiteTool, QuickSubsetMeetsTheRegressionBarsAndWritesReportAndPlots
   EXPECT_TRUE(exists(dir + "/default_wave_tracking.png"));
   EXPECT_TRUE(exists(dir + "/default_wave_volumes.png"));
   EXPECT_TRUE(exists(dir + "/default_wave_frames.csv"));
+  // The upper body (PAPF, on by default): its section, a row per run, its plot, its floors.
+  EXPECT_NE(md.find("## Upper body (PAPF)"), std::string::npos) << md;
+  EXPECT_NE(md.find("Over 6 scenarios with the PAPF"), std::string::npos) << md;
+  EXPECT_NE(md.find("| PAPF head centre median <= 20.0 mm |"), std::string::npos) << md;
+  EXPECT_TRUE(exists(dir + "/body_bars.png"));
+  EXPECT_NE(readFile(dir + "/default_wave_summary.txt").find("  PAPF: tracked"), std::string::npos);
   cleanUp(base);
 }
 
 TEST(ScenarioSuiteTool, ScenarioThatCannotRunIsReportedTheOthersRunAndTheExitStatusIsOne) {
   const std::string base = tempDir(), dir = base + "/out";
-  const ToolRun r = runTool("--scenarios no-such-scenario,default --frames 5 --mesh-every 0", dir);
+  const ToolRun r = runTool("--scenarios no-such-scenario,default --frames 5 --mesh-every 0 --no-body", dir);
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("no-such-scenario (all): FAILED TO RUN"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("1 of 2 scenarios failed to run: no-such-scenario (all)"), std::string::npos) << r.err;
@@ -87,6 +93,9 @@ TEST(ScenarioSuiteTool, ScenarioThatCannotRunIsReportedTheOthersRunAndTheExitSta
   EXPECT_NE(md.find("| no-such-scenario | all | - |"), std::string::npos) << md;
   EXPECT_NE(md.find("## Scenarios that failed to run"), std::string::npos);
   EXPECT_NE(md.find("## Summary over 1 scenarios"), std::string::npos);
+  // --no-body: the PAPF did not run, and says so.
+  EXPECT_NE(md.find("The PAPF did not run"), std::string::npos) << md;
+  EXPECT_FALSE(exists(dir + "/body_bars.png"));
   cleanUp(base);
 }
 

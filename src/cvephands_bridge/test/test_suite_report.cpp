@@ -3,6 +3,7 @@
 // and unmeasured scenarios, and the markdown report's tables.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -41,7 +42,18 @@ ScenarioFigures good(const std::string& name) {
   f.false_targets_empty = 0, f.false_targets_person = 0;
   f.mesh_mm = 7.0, f.meshes = 10;
   f.psfs_ms = 50, f.mpf_ms = 1, f.wall_s = 10;
+  f.body_hand_mm = 20, f.body_head_mm = 12, f.body_elbow_mm = 35, f.body_shoulder_mm = 30;
+  f.body_hand_max_mm = 60, f.body_head_max_mm = 25;
+  f.body_tracked_fraction = 1.0, f.body_untracked_frames = 0, f.body_starts = 1;
+  f.body_restarts = 0, f.body_losses = 0, f.body_false_frames_empty = 0, f.papf_ms = 25;
   return f;
+}
+
+const cvephands::MeasureSummary& summaryOf(const std::vector<cvephands::MeasureSummary>& v,
+                                           const std::string& key) {
+  for (const auto& m : v)
+    if (m.key == key) return m;
+  throw std::runtime_error("no summary " + key);
 }
 
 const cvephands::BarVerdict& verdict(const std::vector<cvephands::BarVerdict>& v,
@@ -218,6 +230,105 @@ TEST(SuiteReport, MarkdownHasARowPerScenarioTheSummaryTableVerdictsAndFailures) 
   EXPECT_NE(md.find("| hand mesh to truth median <= 8.00 mm | 7.00 | PASS |"), std::string::npos) << md;
   EXPECT_NE(md.find("design bars: FAIL"), std::string::npos);
   EXPECT_NE(md.find("[suite_bars.png](suite_bars.png)"), std::string::npos);
+}
+
+TEST(SuiteBody, BodyMeasuresAggregateMedianAndWorstDecileWithMissingAndNeverTrackedValues) {
+  // 10 scenarios with the PAPF, one where it was off (--no-body style: NaN), one failed.
+  std::vector<ScenarioFigures> s;
+  for (int i = 0; i < 10; ++i) {
+    s.push_back(good("s" + std::to_string(i)));
+    s[i].body_head_mm = 10.0 + i;           // 10 .. 19
+    s[i].body_elbow_mm = 30.0 + 10.0 * i;   // 30 .. 120
+    s[i].body_tracked_fraction = 1.0 - 0.05 * i;  // 1.00 .. 0.55
+    s[i].body_restarts = i >= 8 ? 3 : 0;
+  }
+  s[9].body_hand_mm = kInf;  // the person there, never a pose: the worst
+  ScenarioFigures off = good("off");
+  off.body_hand_mm = off.body_head_mm = off.body_elbow_mm = off.body_shoulder_mm = kNaN;
+  off.body_tracked_fraction = off.body_untracked_frames = off.body_starts = kNaN;
+  off.body_restarts = off.body_losses = off.body_false_frames_empty = off.papf_ms = kNaN;
+  EXPECT_FALSE(off.bodyRan());
+  EXPECT_TRUE(off.ran());
+  s.push_back(off);
+  s.push_back(ScenarioFigures::failed("f", "all", "", "boom"));
+  const auto sums = cvephands::summarize(s);
+  // Head: 10 values (the PAPF-off and the failed one left out); median of 14 and 15; worst
+  // decile of 10 = the second worst.
+  EXPECT_EQ(summaryOf(sums, "body_head_mm").count, 10);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_head_mm").median, 14.5);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_head_mm").worst_decile, 18.0);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_head_mm").worst, 19.0);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_elbow_mm").median, 75.0);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_elbow_mm").worst_decile, 110.0);
+  // Tracked fraction: higher is better, the worst decile is the second lowest.
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_tracked_fraction").worst_decile, 0.60);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_tracked_fraction").worst, 0.55);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_restarts").median, 0.0);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_restarts").worst_decile, 3.0);
+  // Never tracked in one of 10: the worst, and the worst decile is the second worst (finite).
+  EXPECT_EQ(summaryOf(sums, "body_hand_mm").worst, kInf);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_hand_mm").worst_decile, 20.0);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_hand_mm").median, 20.0);
+  // Every body key is a suite measure; the reference bars are issue 16's and are neither
+  // design bars nor asserted regression guards beyond what regressionBars() lists.
+  for (const std::string& k : cvephands::bodyMeasureKeys()) EXPECT_NO_THROW(cvephands::measureDef(k));
+  const BarSet ref = cvephands::bodyReferenceBars();
+  ASSERT_EQ(ref.bars.size(), 3u);
+  EXPECT_EQ(cvephands::describeBar(ref.bars[0]), "PAPF hands vs palm + fingers centroid median <= 16.0 mm");
+  const std::vector<std::string> keys = cvephands::bodyMeasureKeys();
+  for (const Bar& b : cvephands::designBars().bars)
+    EXPECT_EQ(std::find(keys.begin(), keys.end(), b.key), keys.end()) << b.key;
+  EXPECT_THROW(cvephands::barSetByName("issue16"), std::invalid_argument);
+  // The regression set: loose floors on three PAPF medians when it ran, none without it.
+  int floors = 0;
+  for (const Bar& b : cvephands::regressionBars(true).bars)
+    if (std::find(keys.begin(), keys.end(), b.key) != keys.end()) {
+      ++floors;
+      EXPECT_EQ(b.statistic, Statistic::kMedian) << b.key;
+    }
+  EXPECT_EQ(floors, 3);
+  for (const Bar& b : cvephands::regressionBars(false).bars)
+    EXPECT_EQ(std::find(keys.begin(), keys.end(), b.key), keys.end()) << b.key;
+  EXPECT_EQ(cvephands::regressionBars(false).bars.size() + 3, cvephands::regressionBars().bars.size());
+}
+
+TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
+  std::vector<ScenarioFigures> s = {good("default"), good("random-7"),
+                                    ScenarioFigures::failed("random-8", "all", "eight", "boom")};
+  s[1].body_hand_mm = 250.0, s[1].body_head_mm = kInf, s[1].body_starts = 4, s[1].body_restarts = 3;
+  s[1].body_tracked_fraction = 0.5, s[1].body_untracked_frames = 50;
+  cvephands::ReportContext c;
+  const std::string md = cvephands::markdownReport(s, cvephands::summarize(s), c);
+  EXPECT_NE(md.find("## Upper body (PAPF)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| default | all | 1.000 | 0 | 1 | 0 | 0 | 20.0 | 60.0 | 12.0 | 25.0 | 35.0 | 30.0 | 25.0 |"),
+            std::string::npos) << md;
+  EXPECT_NE(md.find("| random-7 | all | 0.500 | 50 | 4 | 0 | 0 | 250.0 | 60.0 | never |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| random-8 | all | - |"), std::string::npos);
+  EXPECT_NE(md.find("Over 2 scenarios with the PAPF"), std::string::npos) << md;
+  // Suite statistics of the body measures (2 values: median = their mean, worst = worst decile).
+  EXPECT_NE(md.find("| PAPF hands vs palm + fingers centroid (mm) | 2 | 135.0 | 250.0 | 250.0 |"),
+            std::string::npos) << md;
+  EXPECT_NE(md.find("| PAPF head centre (mm) | 2 | never | never | never |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| PAPF tracked fraction | 2 | 0.750 | 0.500 | 0.500 |"), std::string::npos) << md;
+  // The reference bars: reported with a verdict, never asserted.
+  EXPECT_NE(md.find("| PAPF head centre median <= 15.0 mm | never | FAIL |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| PAPF elbows median <= 25.0 mm | 35.0 | FAIL |"), std::string::npos) << md;
+  // ...and only there: the pipeline's summary table does not repeat them.
+  const size_t body = md.find("## Upper body (PAPF)");
+  EXPECT_EQ(md.rfind("| PAPF elbows (mm) |", body), std::string::npos);
+
+  // The PAPF off everywhere (--no-body): a line says so, no table.
+  for (auto& f : s) {
+    f.body_hand_mm = f.body_head_mm = f.body_elbow_mm = f.body_shoulder_mm = kNaN;
+    f.body_tracked_fraction = kNaN;
+  }
+  c.asserted = "regression";
+  const std::string off = cvephands::markdownReport(s, cvephands::summarize(s), c);
+  EXPECT_NE(off.find("## Upper body (PAPF)\n\nThe PAPF did not run"), std::string::npos) << off;
+  EXPECT_EQ(off.find("Over 2 scenarios with the PAPF"), std::string::npos);
+  // ...and the asserted regression set has no PAPF floor to fail as "not measured".
+  EXPECT_EQ(off.find("PAPF head centre median"), std::string::npos) << off;
+  EXPECT_NE(off.find("regression bars: all PASS"), std::string::npos) << off;
 }
 
 TEST(SuiteReport, ValuesAreFormattedWithNotMeasuredAndNeverSpelledOut) {

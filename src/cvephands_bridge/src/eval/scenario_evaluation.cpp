@@ -6,8 +6,11 @@
 #include <cstdio>
 #include <initializer_list>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
+#include "body_tracking/papf.h"
+#include "body_tracking/papf_config.h"
 #include "hand_tracking/mpf_config.h"
 #include "hand_tracking/mpf_tracker.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
@@ -100,7 +103,61 @@ double pooledMax(const sim::TrackingEvaluator& ev, std::initializer_list<int> ta
   return m;
 }
 
+// Euclidean distance in mm; NaN when the truth is not finite (not scored).
+double distMm(const Eigen::Vector3d& estimate, const Eigen::Vector3d& truth) {
+  return truth.allFinite() ? 1000.0 * (estimate - truth).norm() : kNaN;
+}
+
+// Mean of the finite values among a and b (NaN if none).
+double meanOf(double a, double b) {
+  if (std::isfinite(a) && std::isfinite(b)) return 0.5 * (a + b);
+  return std::isfinite(a) ? a : b;
+}
+
+// The PAPF after one frame: tracking state, starts, losses and the errors against the truth
+// (the conventions of body_tracking's test_papf_sim; scenario_evaluation.h).
+void scoreBody(const body_tracking::BodyEstimate& e, const sim::GroundTruth& g, bool was_tracking,
+               BodyTrackingFigures* b, ScenarioFrame* sf) {
+  sf->body_tracking = e.tracking;
+  sf->body_started = e.started;
+  b->starts += e.started;
+  if (!g.person_present) {
+    b->empty_tracked_frames += e.tracking;
+    return;
+  }
+  ++b->person_frames;
+  if (was_tracking && !e.tracking) ++b->losses;
+  if (!e.tracking) return;
+  ++b->tracked_frames;
+  double hand[2], elbow[2], shoulder[2];
+  for (int i = 0; i < 2; ++i) {
+    const bool in_ws = i == 0 ? g.left_hand_in_workspace : g.right_hand_in_workspace;
+    hand[i] = in_ws ? distMm(e.hands.position[i], i == 0 ? g.left_hand : g.right_hand) : kNaN;
+    elbow[i] = distMm(e.frames.elbow[i], g.elbow[i]);
+    shoulder[i] = distMm(e.frames.shoulder[i], g.shoulder[i]);
+    if (std::isfinite(hand[i])) b->hand_mm.add(hand[i]);
+    if (std::isfinite(elbow[i])) b->elbow_mm.add(elbow[i]);
+    if (std::isfinite(shoulder[i])) b->shoulder_mm.add(shoulder[i]);
+  }
+  const double head = g.head_in_workspace ? distMm(e.frames.head_centre, g.head) : kNaN;
+  if (std::isfinite(head)) b->head_mm.add(head);
+  sf->body_hand_mm = meanOf(hand[0], hand[1]);
+  sf->body_head_mm = head;
+  sf->body_elbow_mm = meanOf(elbow[0], elbow[1]);
+  sf->body_shoulder_mm = meanOf(shoulder[0], shoulder[1]);
+}
+
 }  // namespace
+
+double BodyTrackingFigures::trackedFraction() const {
+  return ran && person_frames > 0 ? double(tracked_frames) / person_frames : kNaN;
+}
+
+double BodyTrackingFigures::meanMm(const tabletop_common::RunningStats& s) const {
+  if (!ran || person_frames == 0) return kNaN;
+  if (s.count() == 0) return person_frames >= kNeverTrackedMinFrames ? kInf : kNaN;
+  return s.mean();
+}
 
 std::string describeScenario(const std::string& scenario) {
   // Also called for a scenario that failed to run, so a bad name is described, not thrown.
@@ -131,6 +188,20 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
     throw std::invalid_argument("evaluateScenario: no skin model (set skin_model or psfs_config)");
   hand_tracking::MpfParams mp;
   if (!o.mpf_config.empty()) mp = hand_tracking::loadMpfConfig(o.mpf_config).params;
+  // The PAPF: its file's parameters, the scenario's seed (same options, same figures).
+  std::unique_ptr<body_tracking::Papf> papf;
+  bool papf_skin = true;
+  if (o.body) {
+    body_tracking::PapfConfig pc;
+    if (!o.papf_config.empty()) pc = body_tracking::loadPapfConfig(o.papf_config);
+    pc.params.seed = o.seed;
+    const body_tracking::BodyProfile profile =
+        pc.nodelet.body_profile_file.empty()
+            ? body_tracking::BodyProfile()  // what config/body_profile.yaml holds
+            : body_tracking::BodyProfile::fromYamlFile(pc.nodelet.body_profile_file);
+    papf = std::make_unique<body_tracking::Papf>(profile, pc.params);
+    papf_skin = pc.nodelet.use_skin_volume;
+  }
   HandMeshEvalOptions mo = o.mesh;
   mo.seed = static_cast<int>(o.seed);  // truth surface samples
   HandMeshScorer scorer(mo);
@@ -151,6 +222,8 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
   res.description = o.describe ? o.describe(o.scenario) : describeScenario(o.scenario);
   res.seed = o.seed;
   res.occupancy_threshold = o.occupancy_threshold;
+  res.body.ran = o.body;
+  bool body_was_tracking = false;
   const uint8_t tb = psfs::thresholdByte(o.occupancy_threshold);
   const int first_person = rig.options().empty_frames;
   const int total = o.frames > 0 ? first_person + o.frames : rig.scriptFrames();
@@ -181,6 +254,13 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
       sf.psfs_ms = r.times.total;
       sf.mpf_ms = tracker.lastTimes().total_ms;
       for (const sim::TrackedPoint& p : points) sf.active_targets += p.active;
+      if (papf) {
+        const body_tracking::BodyEstimate& e = papf->update(r.body, papf_skin ? &r.skin : nullptr);
+        sf.papf_ms = papf->lastTimes().total_ms;
+        res.body.papf_ms.add(sf.papf_ms);
+        scoreBody(e, g, body_was_tracking, &res.body, &sf);
+        body_was_tracking = e.tracking;
+      }
       if (res.grid.empty()) res.grid = r.body.grid.describe();
       if (r.body.grid != r.skin.grid)
         throw std::logic_error("evaluateScenario: body and skin volumes on different grids");
@@ -271,8 +351,23 @@ double ScenarioEvalResult::trackedFraction() const {
   return visible ? double(tracked) / visible : kNaN;
 }
 
+std::string ScenarioEvalResult::bodySummary() const {
+  if (!body.ran) return "  PAPF: off\n";
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "  PAPF: tracked %d/%d person frames (%d untracked), %d start(s), %d loss(es), %d "
+                "empty-scene frames tracked; hands %.1f mm (max %.1f), head %.1f (max %.1f), "
+                "elbows %.1f (max %.1f), shoulders %.1f (max %.1f); %.1f ms per set\n",
+                body.tracked_frames, body.person_frames, body.untrackedFrames(), body.starts,
+                body.losses, body.empty_tracked_frames, body.meanMm(body.hand_mm), body.hand_mm.max(),
+                body.meanMm(body.head_mm), body.head_mm.max(), body.meanMm(body.elbow_mm),
+                body.elbow_mm.max(), body.meanMm(body.shoulder_mm), body.shoulder_mm.max(),
+                body.papf_ms.mean());
+  return buf;
+}
+
 std::string ScenarioEvalResult::summary() const {
-  char buf[1024];
+  char buf[2048];
   std::snprintf(
       buf, sizeof(buf),
       "scenario '%s', script '%s', seed %llu: %d empty + %d person frames scored (%s)\n"
@@ -283,7 +378,7 @@ std::string ScenarioEvalResult::summary() const {
       "  losses %d, identity switches %d, tracked %.0f %%, false-target frames %d empty / %d "
       "person\n"
       "  hand meshes: %zu scored, mesh->truth %.2f mm, truth->mesh %.2f mm\n"
-      "  pSfS %.1f ms, MPF %.2f ms per set; %.1f s wall\n",
+      "  pSfS %.1f ms, MPF %.2f ms per set; %.1f s wall\n%s",
       scenario.c_str(), script.c_str(), static_cast<unsigned long long>(seed), empty_frames,
       person_frames, grid.c_str(), occupancy_threshold, body_iou.mean(), body_iou.min(),
       body_precision.mean(), body_recall.mean(), skin_iou.mean(), skin_iou.min(),
@@ -291,7 +386,7 @@ std::string ScenarioEvalResult::summary() const {
       headAlignedErrorMeanMm(), headErrorMaxMm(), losses(), identitySwitches(),
       100.0 * trackedFraction(), false_target_frames_empty, false_target_frames_person,
       meshes.size(), mesh_to_truth_mm.mean(), truth_to_mesh_mm.mean(), psfs_ms.mean(),
-      mpf_ms.mean(), wall_s);
+      mpf_ms.mean(), wall_s, bodySummary().c_str());
   return buf;
 }
 

@@ -127,6 +127,14 @@ bool writeSuiteBarsPlot(const std::string& path, const std::vector<ScenarioFigur
   return cv::imwrite(path, img);
 }
 
+bool writeBodyBarsPlot(const std::string& path, const std::vector<ScenarioFigures>& scenarios, int width,
+                       int panel_height) {
+  return writeSuiteBarsPlot(path, scenarios, {bodyReferenceBars()},
+                            {"body_hand_mm", "body_head_mm", "body_elbow_mm", "body_shoulder_mm",
+                             "body_tracked_fraction"},
+                            width, panel_height);
+}
+
 bool writeVolumeIoUPlot(const std::string& path, const ScenarioEvalResult& r, int width, int height) {
   std::vector<const ScenarioFrame*> f;
   for (const ScenarioFrame& s : r.frames)

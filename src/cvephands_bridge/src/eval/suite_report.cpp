@@ -39,6 +39,66 @@ std::string cell(const std::string& s) {  // a markdown table cell: no '|' or li
 
 std::string fmt(double v, int decimals) { return formatValue(v, decimals); }
 
+std::string verdictTable(const std::vector<MeasureSummary>& summaries, const BarSet& set) {
+  std::string s = "| bar | value | verdict |\n|---|---:|---|\n";
+  for (const BarVerdict& v : checkBars(summaries, set)) {
+    const MeasureDef& d = measureDef(v.bar.key);
+    s += "| " + describeBar(v.bar) + " | " + fmt(v.value, d.decimals) + " | " +
+         (v.pass ? "PASS" : (v.measured ? "FAIL" : "FAIL (not measured)")) + " |\n";
+  }
+  return s;
+}
+
+// The upper-body (PAPF) section: per scenario, the suite's statistics, the reference bars.
+std::string bodySection(const std::vector<ScenarioFigures>& scenarios,
+                        const std::vector<MeasureSummary>& summaries) {
+  std::string s = "\n## Upper body (PAPF)\n\n";
+  int ran = 0;
+  for (const ScenarioFigures& f : scenarios) ran += f.bodyRan();
+  if (ran == 0) return s + "The PAPF did not run (`--no-body`, or no scenario ran).\n";
+  s += "The upper-body tracker (body_tracking's PAPF, seeded with the scenario seed) on the same "
+       "body and skin volumes, scored as test_papf_sim scores it: on the person frames with a "
+       "pose reported, hands (the estimate's hands vs the palm + fingers centroid), head centre, "
+       "elbows and shoulders, both sides pooled, mean mm; `never` = the person there for a "
+       "second or more and no pose ever reported. Untracked: person frames without a pose "
+       "(before the first start, or after a loss); starts include the first; losses: the pose "
+       "dropped with the person there; empty: empty-scene frames with a pose. No design bar, "
+       "and the CI subset asserts no more than loose regression floors (medians of head, hands "
+       "and tracked fraction, about twice today's figures): the PAPF generalises "
+       "poorly to generated scenarios today (arms fold into the trunk; docs/benchmarks.md, "
+       "\"PAPF upper-body tracker\"), and these figures show it.\n\n";
+  s += "| scenario | script | tracked | untracked | starts | losses | empty | hands | hands max | "
+       "head | head max | elbows | shoulders | PAPF ms |\n";
+  s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const ScenarioFigures& f : scenarios) {
+    s += "| " + cell(f.name) + " | " + cell(f.script) + " | ";
+    if (!f.ran()) {
+      s += "- | - | - | - | - | - | - | - | - | - | - | **failed to run** |\n";
+      continue;
+    }
+    s += fmt(f.body_tracked_fraction, 3) + " | " + fmt(f.body_untracked_frames, 0) + " | " +
+         fmt(f.body_starts, 0) + " | " + fmt(f.body_losses, 0) + " | " +
+         fmt(f.body_false_frames_empty, 0) + " | " + fmt(f.body_hand_mm, 1) + " | " +
+         fmt(f.body_hand_max_mm, 1) + " | " + fmt(f.body_head_mm, 1) + " | " +
+         fmt(f.body_head_max_mm, 1) + " | " + fmt(f.body_elbow_mm, 1) + " | " +
+         fmt(f.body_shoulder_mm, 1) + " | " + fmt(f.papf_ms, 1) + " |\n";
+  }
+  s += "\nOver " + std::to_string(ran) + " scenarios with the PAPF:\n\n";
+  s += "| measure | scenarios | median | worst decile | worst |\n|---|---:|---:|---:|---:|\n";
+  for (const std::string& key : bodyMeasureKeys())
+    for (const MeasureSummary& m : summaries) {
+      if (m.key != key) continue;
+      const MeasureDef& d = measureDef(m.key);
+      const std::string unit = *d.unit ? std::string(" (") + d.unit + ")" : std::string();
+      s += "| " + std::string(d.label) + unit + " | " + std::to_string(m.count) + " | " +
+           fmt(m.median, d.decimals) + " | " + fmt(m.worst_decile, d.decimals) + " | " +
+           fmt(m.worst, d.decimals) + " |\n";
+    }
+  const BarSet ref = bodyReferenceBars();
+  s += "\n" + ref.note + "\n\n" + verdictTable(summaries, ref);
+  return s;
+}
+
 }  // namespace
 
 // ---- per-scenario figures -----------------------------------------------------------------
@@ -74,6 +134,24 @@ ScenarioFigures ScenarioFigures::of(const ScenarioEvalResult& r) {
     f.mesh_mm = r.mesh_to_truth_mm.mean(), f.mesh_max_mm = r.mesh_to_truth_mm.max();
   if (r.psfs_ms.count()) f.psfs_ms = r.psfs_ms.mean(), f.mpf_ms = r.mpf_ms.mean();
   f.wall_s = r.wall_s;
+  const BodyTrackingFigures& b = r.body;
+  if (b.ran) {
+    f.body_hand_mm = b.meanMm(b.hand_mm);
+    f.body_head_mm = b.meanMm(b.head_mm);
+    f.body_elbow_mm = b.meanMm(b.elbow_mm);
+    f.body_shoulder_mm = b.meanMm(b.shoulder_mm);
+    if (b.hand_mm.count()) f.body_hand_max_mm = b.hand_mm.max();
+    if (b.head_mm.count()) f.body_head_max_mm = b.head_mm.max();
+    f.body_tracked_fraction = b.trackedFraction();
+    if (b.person_frames > 0) {
+      f.body_untracked_frames = b.untrackedFrames();
+      f.body_losses = b.losses;
+    }
+    f.body_starts = b.starts;
+    f.body_restarts = b.restarts();
+    if (r.empty_frames > 0) f.body_false_frames_empty = b.empty_tracked_frames;
+    if (b.papf_ms.count()) f.papf_ms = b.papf_ms.mean();
+  }
   return f;
 }
 
@@ -108,6 +186,19 @@ const std::vector<MeasureDef>& suiteMeasures() {
       {"false_targets_person", "false-target frames, with person", "", Better::kLower,
        &F::false_targets_person, 1},
       {"mesh_mm", "hand mesh to truth", "mm", Better::kLower, &F::mesh_mm, 2},
+      {"body_hand_mm", "PAPF hands vs palm + fingers centroid", "mm", Better::kLower,
+       &F::body_hand_mm, 1},
+      {"body_head_mm", "PAPF head centre", "mm", Better::kLower, &F::body_head_mm, 1},
+      {"body_elbow_mm", "PAPF elbows", "mm", Better::kLower, &F::body_elbow_mm, 1},
+      {"body_shoulder_mm", "PAPF shoulders", "mm", Better::kLower, &F::body_shoulder_mm, 1},
+      {"body_tracked_fraction", "PAPF tracked fraction", "", Better::kHigher,
+       &F::body_tracked_fraction, 3},
+      {"body_untracked_frames", "PAPF person frames without a pose", "", Better::kLower,
+       &F::body_untracked_frames, 1},
+      {"body_restarts", "PAPF restarts", "", Better::kLower, &F::body_restarts, 1},
+      {"body_losses", "PAPF losses", "", Better::kLower, &F::body_losses, 1},
+      {"body_false_frames_empty", "PAPF frames tracked in the empty scene", "", Better::kLower,
+       &F::body_false_frames_empty, 1},
   };
   return defs;
 }
@@ -208,9 +299,19 @@ constexpr double kHandSkinMmWorstDecile = 24.0;  // measured 21.0 (22.3)
 constexpr double kHeadMmMedian = 10.0;           // measured 8.0 (10.1; design bar 12)
 constexpr double kHeadMmWorstDecile = 14.0;      // measured 12.2 (37.3; design bar 20)
 constexpr double kMeshMmMedian = 15.0;           // measured 13.86 (13.16)
+// The PAPF (issue 16 item 4; 2026-12-03, the same subset: head 8.5-16.9 mm on the five default-
+// person runs, 36.5 on random-5; hands 15.3-25.1, 183 on random-5; tracked in every person
+// frame). LOOSE FLOORS on medians only, about twice today's figures: the PAPF generalises
+// poorly (an arm folds into the trunk on generated scenarios, random-5 here; docs/benchmarks.md)
+// and its worst cases are chaotic (a different random draw folds a different arm), so no
+// worst-decile guard and no floor on elbows or shoulders; these catch a broken link (wrong
+// volumes, frames or truth) or a tracker that no longer starts, not a few millimetres.
+constexpr double kBodyHeadMmMedian = 20.0;         // measured 9.0
+constexpr double kBodyHandMmMedian = 40.0;         // measured 19.2
+constexpr double kBodyTrackedFractionMedian = 0.9; // measured 1.000
 }  // namespace regression
 
-BarSet regressionBars() {
+BarSet regressionBars(bool body) {
   using namespace regression;
   BarSet b;
   b.name = "regression";
@@ -231,7 +332,32 @@ BarSet regressionBars() {
       {"false_targets_empty", Statistic::kWorst, 0.0},
       {"mesh_mm", Statistic::kMedian, kMeshMmMedian},
   };
+  if (body) {
+    b.bars.push_back({"body_head_mm", Statistic::kMedian, kBodyHeadMmMedian});
+    b.bars.push_back({"body_hand_mm", Statistic::kMedian, kBodyHandMmMedian});
+    b.bars.push_back({"body_tracked_fraction", Statistic::kMedian, kBodyTrackedFractionMedian});
+  }
   return b;
+}
+
+BarSet bodyReferenceBars() {
+  BarSet b;
+  b.name = "issue16";
+  b.note = "Issue 16's PAPF bars (set for the mean over one sequence; here on the suite median), "
+           "for reference: reported, never asserted. The PAPF generalises poorly to generated "
+           "scenarios today (docs/benchmarks.md, \"PAPF upper-body tracker\").";
+  b.bars = {
+      {"body_hand_mm", Statistic::kMedian, 16.0},
+      {"body_head_mm", Statistic::kMedian, 15.0},
+      {"body_elbow_mm", Statistic::kMedian, 25.0},
+  };
+  return b;
+}
+
+std::vector<std::string> bodyMeasureKeys() {
+  return {"body_hand_mm",          "body_head_mm",  "body_elbow_mm", "body_shoulder_mm",
+          "body_tracked_fraction", "body_untracked_frames", "body_restarts", "body_losses",
+          "body_false_frames_empty"};
 }
 
 BarSet barSetByName(const std::string& name) {
@@ -321,8 +447,14 @@ std::string markdownReport(const std::vector<ScenarioFigures>& scenarios,
   }
 
   s += "\n## Summary over " + std::to_string(ran) + " scenarios\n\n";
+  const std::vector<std::string> body_keys = bodyMeasureKeys();
+  auto isBody = [&](const std::string& key) {
+    return std::find(body_keys.begin(), body_keys.end(), key) != body_keys.end();
+  };
+  s += "Pipeline measures; the PAPF's are in the upper-body section below.\n\n";
   s += "| measure | scenarios | median | worst decile | worst |\n|---|---:|---:|---:|---:|\n";
   for (const MeasureSummary& m : summaries) {
+    if (isBody(m.key)) continue;
     const MeasureDef& d = measureDef(m.key);
     const std::string unit = *d.unit ? std::string(" (") + d.unit + ")" : std::string();
     s += "| " + std::string(d.label) + unit + " | " + std::to_string(m.count) + " | " +
@@ -330,8 +462,10 @@ std::string markdownReport(const std::vector<ScenarioFigures>& scenarios,
          fmt(m.worst, d.decimals) + " |\n";
   }
 
+  bool body_ran = false;
+  for (const ScenarioFigures& f : scenarios) body_ran = body_ran || f.bodyRan();
   std::vector<BarSet> sets = {designBars()};
-  if (c.asserted == "regression") sets.push_back(regressionBars());
+  if (c.asserted == "regression") sets.push_back(regressionBars(body_ran));
   for (const BarSet& set : sets) {
     const std::vector<BarVerdict> verdicts = checkBars(summaries, set);
     const bool asserted = c.asserted == set.name;
@@ -344,6 +478,8 @@ std::string markdownReport(const std::vector<ScenarioFigures>& scenarios,
     }
     s += std::string("\n") + set.name + " bars: " + (allPass(verdicts) ? "all PASS" : "FAIL") + "\n";
   }
+
+  s += bodySection(scenarios, summaries);
 
   bool any_failed = false;
   for (const ScenarioFigures& f : scenarios) any_failed = any_failed || !f.ran();

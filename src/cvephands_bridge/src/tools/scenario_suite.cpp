@@ -1,14 +1,17 @@
 // scenario_suite: the accuracy bars of DESIGN.md section 6 over a suite of simulated scenarios
 // (issue 15). Each scenario runs the whole per-frame pipeline in process (scenario_evaluation.h:
 // render -> pSfS -> MPF, volumes vs the occupancy oracle, hands and head vs the truth, hand
-// meshes vs the true surface); the suite aggregates the figures (median, worst decile; see
-// suite_report.h) and writes <out>/report.md, <out>/suite_bars.png and per scenario
+// meshes vs the true surface; the upper-body PAPF on the same volumes, hands, head, elbows and
+// shoulders vs the truth, unless --no-body); the suite aggregates the figures (median, worst
+// decile; see suite_report.h) and writes <out>/report.md, <out>/suite_bars.png,
+// <out>/body_bars.png (with the PAPF) and per scenario
 // <name>_tracking.png, <name>_volumes.png, <name>_frames.csv and <name>_summary.txt (the
 // per-target tracking tables). Prints the report's path on stdout, progress on stderr.
 //
 //   scenario_suite [--scenarios a,b,c] [--random N --first-seed S] [--frames F] [--script NAME]
 //                  [--seed N] [--mesh-every K] [--empty-frames E] [--iou-threshold P] [--out DIR]
-//                  [--quick] [--assert-bars design|regression|none]
+//                  [--quick] [--assert-bars design|regression|none] [--no-body]
+//                  [--psfs-config F] [--mpf-config F] [--papf-config F] [--skin-model F]
 //
 // Exit status: 0, or 1 when a scenario failed to run or the asserted bars fail (both named on
 // stderr), 2 for bad options.
@@ -60,7 +63,7 @@ void usage() {
       "usage: scenario_suite [--scenarios a,b,c] [--random N --first-seed S] [--frames F]\n"
       "                      [--script NAME] [--seed N] [--mesh-every K] [--empty-frames E]\n"
       "                      [--iou-threshold P] [--out DIR] [--quick]\n"
-      "                      [--assert-bars design|regression|none]\n"
+      "                      [--assert-bars design|regression|none] [--no-body]\n"
       "  --scenarios LIST  scenario names, comma-separated (\"default\", presets, random-<seed>)\n"
       "  --random N        N generated scenarios random-S .. random-(S+N-1) (default 24, unless\n"
       "                    --scenarios is given); --first-seed S (default 1)\n"
@@ -79,9 +82,12 @@ void usage() {
       "  --assert-bars SET exit 1 unless the bars hold: design (DESIGN.md section 6), regression\n"
       "                    (the --quick guards) or none (default); the design bars are reported\n"
       "                    in any case\n"
-      "  --psfs-config F, --mpf-config F, --skin-model F   stage configurations (default: the\n"
-      "                    shipped psfs_reconstruction/config/psfs.yaml and its skin model,\n"
-      "                    hand_tracking/config/mpf.yaml)\n");
+      "  --no-body         do not run the upper-body tracker (PAPF; on by default: its figures\n"
+      "                    are reported, never asserted beyond the regression floors)\n"
+      "  --psfs-config F, --mpf-config F, --papf-config F, --skin-model F   stage configurations\n"
+      "                    (default: the shipped psfs_reconstruction/config/psfs.yaml and its skin\n"
+      "                    model, hand_tracking/config/mpf.yaml, body_tracking/config/papf.yaml;\n"
+      "                    the PAPF's seed is --seed whatever its file says)\n");
 }
 
 std::vector<std::string> splitList(const std::string& s) {
@@ -169,13 +175,17 @@ std::string commandLine(int argc, char** argv) {
 bool writeFramesCsv(const std::string& path, const cvephands::ScenarioEvalResult& r) {
   std::ofstream out(path);
   out << "frame,time_s,person,body_iou,body_precision,body_recall,skin_iou,skin_precision,"
-         "skin_recall,body_voxels,skin_voxels,active_targets,psfs_ms,mpf_ms\n";
+         "skin_recall,body_voxels,skin_voxels,active_targets,psfs_ms,mpf_ms,papf_tracking,"
+         "papf_started,papf_hand_mm,papf_head_mm,papf_elbow_mm,papf_shoulder_mm,papf_ms\n";
   char buf[512];
   for (const cvephands::ScenarioFrame& f : r.frames) {
-    std::snprintf(buf, sizeof(buf), "%d,%.3f,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%d,%.2f,%.3f\n",
+    std::snprintf(buf, sizeof(buf),
+                  "%d,%.3f,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%d,%.2f,%.3f,%d,%d,%.1f,%.1f,%.1f,%.1f,%.2f\n",
                   f.frame, f.time, f.person ? 1 : 0, f.body_iou, f.body_precision, f.body_recall,
                   f.skin_iou, f.skin_precision, f.skin_recall, f.body_voxels, f.skin_voxels,
-                  f.active_targets, f.psfs_ms, f.mpf_ms);
+                  f.active_targets, f.psfs_ms, f.mpf_ms, f.body_tracking ? 1 : 0,
+                  f.body_started ? 1 : 0, f.body_hand_mm, f.body_head_mm, f.body_elbow_mm,
+                  f.body_shoulder_mm, f.papf_ms);
     out << buf;
   }
   return bool(out);
@@ -189,7 +199,8 @@ int main(int argc, char** argv) {
   int random_count = 24, first_seed = 1;
   int frames = -1, mesh_every = -1, empty_frames = -1;  // -1: not given
   std::string script, out = "scenario_suite", assert_bars = "none";
-  std::string psfs_config, mpf_config, skin_model;
+  std::string psfs_config, mpf_config, papf_config, skin_model;
+  bool body = true;
   cvephands::ScenarioEvalOptions base;
   tabletop_common::CliArgs args("scenario_suite", argc, argv, usage);
   while (args.next()) {
@@ -210,6 +221,8 @@ int main(int argc, char** argv) {
         args.fail("--assert-bars needs design, regression or none, got '" + assert_bars + "'");
     } else if (args.is("--psfs-config")) psfs_config = args.text();
     else if (args.is("--mpf-config")) mpf_config = args.text();
+    else if (args.is("--papf-config")) papf_config = args.text();
+    else if (args.is("--no-body")) body = false;
     else if (args.is("--skin-model")) skin_model = args.text();
     else if (args.help()) {
       usage();
@@ -249,8 +262,19 @@ int main(int argc, char** argv) {
     if (psfs_config.empty()) psfs_config = psfs + "/config/psfs.yaml";
     if (mpf_config.empty()) mpf_config = mpf + "/config/mpf.yaml";
   }
+  if (body && papf_config.empty()) {
+    const std::string papf = ros::package::getPath("body_tracking");
+    if (papf.empty()) {
+      std::fprintf(stderr, "scenario_suite: package body_tracking not found (source "
+                           "devel/setup.bash, give --papf-config, or --no-body)\n");
+      return 1;
+    }
+    papf_config = papf + "/config/papf.yaml";
+  }
   base.psfs_config = psfs_config;
   base.mpf_config = mpf_config;
+  base.body = body;
+  base.papf_config = body ? papf_config : "";
   base.skin_model = skin_model;  // "" = the one psfs.yaml names
   if (std::system(("mkdir -p '" + out + "'").c_str()) != 0) {
     std::fprintf(stderr, "scenario_suite: cannot create %s\n", out.c_str());
@@ -291,10 +315,17 @@ int main(int argc, char** argv) {
       std::ofstream(out + "/" + stem + "_summary.txt")
           << r.summary() << "\nvs the visible-skin centroid (the MPF's target):\n" << r.tracking_skin.summary()
           << "\nvs the palm + fingers centroid:\n" << r.tracking_palm.summary();
-      std::fprintf(stderr, "%s%s: body IoU %.3f, hands %s mm, head %s mm, mesh %s mm, %.1f s\n",
+      std::string papf;
+      if (f.bodyRan())
+        papf = "; PAPF tracked " + cvephands::formatValue(f.body_tracked_fraction, 2) + ", hands " +
+               cvephands::formatValue(f.body_hand_mm, 1) + ", head " +
+               cvephands::formatValue(f.body_head_mm, 1) + ", elbows " +
+               cvephands::formatValue(f.body_elbow_mm, 1) + ", shoulders " +
+               cvephands::formatValue(f.body_shoulder_mm, 1) + " mm";
+      std::fprintf(stderr, "%s%s: body IoU %.3f, hands %s mm, head %s mm, mesh %s mm%s, %.1f s\n",
                    tty ? "\r" : "", head, f.body_iou, cvephands::formatValue(f.hand_skin_mm, 1).c_str(),
                    cvephands::formatValue(f.head_mm, 1).c_str(),
-                   cvephands::formatValue(f.mesh_mm, 2).c_str(), r.wall_s);
+                   cvephands::formatValue(f.mesh_mm, 2).c_str(), papf.c_str(), r.wall_s);
       figures.push_back(std::move(f));
     } catch (const std::exception& ex) {
       std::fprintf(stderr, "%s%s: FAILED TO RUN: %s\n", tty ? "\r" : "", head, ex.what());
@@ -307,8 +338,9 @@ int main(int argc, char** argv) {
 
   const std::vector<cvephands::MeasureSummary> summaries = cvephands::summarize(figures);
   std::vector<cvephands::BarSet> plotted = {cvephands::designBars()};
-  if (assert_bars == "regression") plotted.push_back(cvephands::regressionBars());
+  if (assert_bars == "regression") plotted.push_back(cvephands::regressionBars(body));
   cvephands::writeSuiteBarsPlot(out + "/suite_bars.png", figures, plotted);
+  if (body && cvephands::writeBodyBarsPlot(out + "/body_bars.png", figures)) plots.insert(plots.begin() + 1, "body_bars.png");
   cvephands::ReportContext c;
   c.date = now();
   c.command_line = commandLine(argc, argv);
@@ -321,10 +353,11 @@ int main(int argc, char** argv) {
   std::snprintf(settings, sizeof(settings),
                 "%s person frames after %d empty-scene frames (and the 25 background-learning "
                 "ones), seed %llu, meshes every %d person frames%s, volumes at p >= %.2f on %s, "
-                "%.0f s in all",
+                "PAPF %s, %.0f s in all",
                 base.frames > 0 ? std::to_string(base.frames).c_str() : "whole-script", base.empty_frames,
                 static_cast<unsigned long long>(base.seed), base.mesh_every, base.mesh_every ? "" : " (off)",
-                base.occupancy_threshold, grid.empty() ? "(no scenario ran)" : grid.c_str(), elapsed());
+                base.occupancy_threshold, grid.empty() ? "(no scenario ran)" : grid.c_str(),
+                body ? "on" : "off (--no-body)", elapsed());
   c.settings = std::string(quick ? "quick subset; " : "") + settings;
   c.plots = plots;
   c.asserted = assert_bars == "none" ? "" : assert_bars;
@@ -350,7 +383,9 @@ int main(int argc, char** argv) {
   for (const std::string& set : {std::string("design"), std::string("regression")}) {
     const bool asserted = set == assert_bars;
     if (set == "regression" && !asserted) continue;
-    const auto verdicts = cvephands::checkBars(summaries, cvephands::barSetByName(set));
+    // Without the PAPF (--no-body) the regression set has no body floors.
+    const auto verdicts = cvephands::checkBars(
+        summaries, set == "regression" ? cvephands::regressionBars(body) : cvephands::barSetByName(set));
     std::string failing;
     for (const auto& v : verdicts)
       if (!v.pass)

@@ -7,6 +7,8 @@
 //                    +-> body and skin volumes vs the occupancy oracle on the same grid
 //                    +-> (every mesh_every-th person frame) hand sub-volumes around the TRUE
 //                        hands -> marching cubes -> mesh vs the true skin surface
+//                    +-> (options.body) body_tracking::Papf on the same body and skin volumes
+//                        -> hands, head, elbows, shoulders vs the truth (issue 16 item 4)
 //
 // Frames: the rig's first empty frame sets go into the background model (as many as the pSfS
 // configuration learns from, BackgroundModelParams::learning_frames, 25; no volumes yet); then
@@ -25,6 +27,13 @@
 // hand_mesh_evaluation.h: this scores reconstruction + meshing, not tracking. Asking for the
 // sub-volumes changes nothing else (the workspace volumes, the background update and so the
 // tracking are the same whatever mesh_every is).
+// Upper body (PAPF): run on every reconstructed set (empty ones too: a track there is a false
+// start), seeded with `seed`, scored as body_tracking's test_papf_sim scores it: on the person
+// frames where the PAPF reports a pose, hands = the estimate's (refined) hands against the palm +
+// fingers centroid (GroundTruth::left_hand / right_hand), head = head_centre against the head
+// ellipsoid's centre, elbows and shoulders against GroundTruth::elbow / shoulder, both sides
+// pooled, Euclidean, mm. A hand or the head is scored where it is in the workspace, the joints
+// where the truth is finite.
 // Timings are recorded for information only; nothing here or in the suite judges speed.
 //
 // Part of cvephands_eval (simulator, reconstruction, tracker and meshing cores; no ROS).
@@ -32,6 +41,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -55,6 +65,11 @@ struct ScenarioEvalOptions {
   // The stage configurations: psfs_reconstruction/config/psfs.yaml and hand_tracking/config/
   // mpf.yaml style files ("" = the parameter structs' defaults, which the shipped files equal).
   std::string psfs_config, mpf_config;
+  // The upper-body tracker: run it (default) or not, and its configuration (body_tracking/
+  // config/papf.yaml style; "" = PapfParams' defaults and the default BodyProfile). Its seed is
+  // always `seed` above (the file's seed is overridden), its threads the file's (default 2).
+  bool body = true;
+  std::string papf_config;
   // psfs_reconstruction/config/skin_gmm.yaml; "" = the skin model psfs_config names (then
   // psfs_config is required).
   std::string skin_model;
@@ -80,6 +95,36 @@ struct ScenarioFrame {
   size_t body_voxels = 0, skin_voxels = 0;  // reconstructed voxels (at the threshold)
   int active_targets = 0;                   // tracker targets active after this frame
   double psfs_ms = 0, mpf_ms = 0;           // pSfS total (incl. hand sub-volumes), MPF update
+  // The PAPF (ScenarioEvalOptions::body): whether it reports a pose after this frame, and its
+  // errors in this frame (NaN where not tracked, not scored or the body is off; hands and the
+  // joints: mean of both sides scored).
+  bool body_tracking = false, body_started = false;
+  double body_hand_mm = std::numeric_limits<double>::quiet_NaN(),
+         body_head_mm = std::numeric_limits<double>::quiet_NaN(),
+         body_elbow_mm = std::numeric_limits<double>::quiet_NaN(),
+         body_shoulder_mm = std::numeric_limits<double>::quiet_NaN();
+  double papf_ms = 0;
+};
+
+// The PAPF's figures over one scenario (see the header comment for what is scored).
+struct BodyTrackingFigures {
+  bool ran = false;          // ScenarioEvalOptions::body was on
+  int person_frames = 0;     // scored frames with the person present
+  int tracked_frames = 0;    // ... of which the PAPF reported a pose
+  int starts = 0;            // frames that (re)started the track (empty frames included)
+  int losses = 0;            // tracked -> not tracked while the person is present
+  int empty_tracked_frames = 0;  // empty-scene frames with a pose reported (false starts)
+  // Per-sample errors (mm): hands and joints both sides pooled.
+  tabletop_common::RunningStats hand_mm, head_mm, elbow_mm, shoulder_mm;
+  tabletop_common::RunningStats papf_ms;  // per update, all scored frames
+
+  // Person frames without a pose reported (the track not started yet, or lost).
+  int untrackedFrames() const { return person_frames - tracked_frames; }
+  int restarts() const { return starts > 0 ? starts - 1 : 0; }
+  double trackedFraction() const;  // NaN without person frames
+  // Mean error of one of hand_mm, head_mm, ...: NaN when not run or no person frame; +inf when
+  // the person was there for a second or more and nothing was ever scored (never tracked).
+  double meanMm(const tabletop_common::RunningStats& s) const;
 };
 
 struct ScenarioEvalResult {
@@ -103,6 +148,7 @@ struct ScenarioEvalResult {
   std::vector<HandMeshSample> meshes;
   tabletop_common::RunningStats mesh_to_truth_mm, truth_to_mesh_mm;  // per-hand means
   tabletop_common::RunningStats psfs_ms, mpf_ms, mesh_score_ms;
+  BodyTrackingFigures body;  // the PAPF (body.ran false when ScenarioEvalOptions::body is off)
   double wall_s = 0;
 
   // Both hands pooled (frames where each is visible and tracked), against one definition:
@@ -116,7 +162,8 @@ struct ScenarioEvalResult {
   int losses() const;                     // all three targets (tracking_skin)
   int identitySwitches() const;
   double trackedFraction() const;  // tracked / visible frames, all three targets (NaN if none)
-  std::string summary() const;     // a few lines for the console
+  std::string summary() const;     // a few lines for the console (bodySummary() included)
+  std::string bodySummary() const;  // the PAPF's line ("  PAPF: off" when it did not run)
 };
 
 // Throws std::invalid_argument for bad options or a scenario/script the simulator rejects,

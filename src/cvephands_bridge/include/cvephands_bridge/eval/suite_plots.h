@@ -22,6 +22,12 @@ bool writeSuiteBarsPlot(const std::string& path, const std::vector<ScenarioFigur
                         const std::vector<std::string>& keys = {"body_iou", "hand_skin_mm", "head_mm"},
                         int width = 1000, int panel_height = 260);
 
+// The upper-body (PAPF) figures per scenario: hands, head, elbows, shoulders (mean mm) and the
+// tracked fraction, with bodyReferenceBars() drawn (for reference, not asserted). False if the
+// file cannot be written.
+bool writeBodyBarsPlot(const std::string& path, const std::vector<ScenarioFigures>& scenarios,
+                       int width = 1000, int panel_height = 220);
+
 // Body and skin IoU per person frame over time. False if nothing to plot or not written.
 bool writeVolumeIoUPlot(const std::string& path, const ScenarioEvalResult& result, int width = 900,
                         int height = 360);
