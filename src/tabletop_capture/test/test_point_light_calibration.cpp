@@ -22,6 +22,7 @@
 
 #include <Eigen/Geometry>
 
+#include "tabletop_capture/calibration/camera_pose_errors.h"
 #include "tabletop_capture/calibration/point_light_calibration.h"
 #include "tabletop_capture/default_rig.h"
 
@@ -76,41 +77,25 @@ Synthetic makeSynthetic(int frames, unsigned seed, const Faults& faults = {}) {
   return s;
 }
 
-struct PoseErrors {
-  std::vector<double> position_m, rotation_deg;
-};
-
 // The result mapped onto the truth by the similarity of its light positions onto the true ones
 // (hundreds of points: the alignment itself adds next to nothing to the cameras' errors).
-PoseErrors compare(const PointLightCalibration& result, const Synthetic& s) {
+std::vector<CameraPoseError> compare(const PointLightCalibration& result, const Synthetic& s) {
   Eigen::Matrix3Xd estimated(3, result.points.size()), truth(3, result.points.size());
   for (size_t p = 0; p < result.points.size(); ++p) {
     estimated.col(p) = result.points[p];
     truth.col(p) = s.lights[result.point_frames[p]];
   }
-  const Eigen::Matrix4d m = Eigen::umeyama(estimated, truth, true);
-  const double scale = m.block<3, 1>(0, 0).norm();
-  const Eigen::Matrix3d r = m.block<3, 3>(0, 0) / scale;
-  PoseErrors e;
-  for (size_t c = 0; c < s.truth.cameras.size(); ++c) {
-    const Eigen::Isometry3d& est = result.rig.cameras[c].world_T_camera;
-    const Eigen::Isometry3d& tru = s.truth.cameras[c].world_T_camera;
-    const Eigen::Vector3d center = scale * r * est.translation() + m.block<3, 1>(0, 3);
-    e.position_m.push_back((center - tru.translation()).norm());
-    const Eigen::AngleAxisd d(tru.linear().transpose() * r * est.linear());
-    e.rotation_deg.push_back(d.angle() * 180 / M_PI);
-  }
-  return e;
+  return cameraPoseErrors(result.rig, s.truth, Eigen::umeyama(estimated, truth, true));
 }
 
 // `loose` (a camera index) gets `loose_position_m` instead of position_m.
-void expectWithin(const PoseErrors& e, const PointLightCalibration& r, double position_m, double rotation_deg,
-                  int loose = -1, double loose_position_m = 0) {
-  for (size_t c = 0; c < e.position_m.size(); ++c) {
-    std::printf("cam%zu: %.2f mm %.4f deg; %d inliers %d outliers, %.3f px RMS\n", c, e.position_m[c] * 1e3,
-                e.rotation_deg[c], r.cameras[c].inliers, r.cameras[c].outliers, r.cameras[c].rms_px);
-    EXPECT_LT(e.position_m[c], static_cast<int>(c) == loose ? loose_position_m : position_m) << "cam" << c;
-    EXPECT_LT(e.rotation_deg[c], rotation_deg) << "cam" << c;
+void expectWithin(const std::vector<CameraPoseError>& e, const PointLightCalibration& r, double position_m,
+                  double rotation_deg, int loose = -1, double loose_position_m = 0) {
+  for (size_t c = 0; c < e.size(); ++c) {
+    std::printf("cam%zu: %.2f mm %.4f deg; %d inliers %d outliers, %.3f px RMS\n", c, e[c].position_m * 1e3,
+                e[c].rotation_deg, r.cameras[c].inliers, r.cameras[c].outliers, r.cameras[c].rms_px);
+    EXPECT_LT(e[c].position_m, static_cast<int>(c) == loose ? loose_position_m : position_m) << "cam" << c;
+    EXPECT_LT(e[c].rotation_deg, rotation_deg) << "cam" << c;
   }
   std::printf("mean reprojection error %.3f px, %d iterations\n", r.mean_error_px, r.iterations);
   EXPECT_LT(r.mean_error_px, 0.3);

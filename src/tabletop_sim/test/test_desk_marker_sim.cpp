@@ -29,6 +29,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "tabletop_capture/calibration/camera_pose_errors.h"
 #include "tabletop_capture/calibration/marker_alignment.h"
 #include "tabletop_capture/default_rig.h"
 #include "tabletop_sim/desk_marker.h"
@@ -67,20 +68,14 @@ RigDescription disturbed(const RigDescription& truth) {
 
 void expectCamerasAt(const RigDescription& got, const RigDescription& truth, double max_mm, double max_deg,
                      const char* what) {
-  double worst_mm = 0, worst_deg = 0;
-  for (size_t i = 0; i < truth.cameras.size(); ++i) {
-    const auto& a = got.cameras[i];
-    const auto& b = truth.cameras[i];
-    const double mm = (a.center() - b.center()).norm() * 1e3;
-    const double deg =
-        Eigen::AngleAxisd(a.world_T_camera.linear().transpose() * b.world_T_camera.linear()).angle() * 180 / M_PI;
-    std::printf("[ figures  ] %s %s: %.3f mm, %.4f deg\n", what, a.name.c_str(), mm, deg);
-    EXPECT_LT(mm, max_mm) << a.name;
-    EXPECT_LT(deg, max_deg) << a.name;
-    worst_mm = std::max(worst_mm, mm);
-    worst_deg = std::max(worst_deg, deg);
+  const auto errors = tabletop_capture::cameraPoseErrors(got, truth);
+  for (const auto& e : errors) {
+    std::printf("[ figures  ] %s %s: %.3f mm, %.4f deg\n", what, e.camera.c_str(), e.position_m * 1e3, e.rotation_deg);
+    EXPECT_LT(e.position_m * 1e3, max_mm) << e.camera;
+    EXPECT_LT(e.rotation_deg, max_deg) << e.camera;
   }
-  std::printf("[ figures  ] %s worst: %.3f mm, %.4f deg\n", what, worst_mm, worst_deg);
+  const auto worst = tabletop_capture::worstPoseError(errors);
+  std::printf("[ figures  ] %s worst: %.3f mm, %.4f deg\n", what, worst.position_m * 1e3, worst.rotation_deg);
 }
 
 TEST(DeskMarkerSim, CornersMatchTheProjectedTruth) {

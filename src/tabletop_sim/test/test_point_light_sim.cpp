@@ -18,6 +18,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tabletop_capture/calibration/camera_pose_errors.h"
 #include "tabletop_capture/calibration/light_blob.h"
 #include "tabletop_capture/calibration/light_images.h"
 #include "tabletop_capture/calibration/point_light_calibration.h"
@@ -81,19 +82,14 @@ void expectCloseToTruth(const tabletop_capture::PointLightCalibration& result, c
     est.col(p) = result.points[p];
     tru.col(p) = r.path[result.point_frames[p]];
   }
-  const Eigen::Matrix4d m = Eigen::umeyama(est, tru, true);
-  const double s = m.block<3, 1>(0, 0).norm();
-  const Eigen::Matrix3d rot = m.block<3, 3>(0, 0) / s;
-  for (size_t c = 0; c < r.truth.cameras.size(); ++c) {
-    const auto& e = result.rig.cameras[c].world_T_camera;
-    const auto& t = r.truth.cameras[c].world_T_camera;
-    const double dp = (s * rot * e.translation() + m.block<3, 1>(0, 3) - t.translation()).norm();
-    const double dr = Eigen::AngleAxisd(t.linear().transpose() * rot * e.linear()).angle() * 180 / M_PI;
+  const auto errors = tabletop_capture::cameraPoseErrors(result.rig, r.truth, Eigen::umeyama(est, tru, true));
+  for (size_t c = 0; c < errors.size(); ++c) {
+    const auto& e = errors[c];
     const auto& st = result.cameras[c];
-    std::printf("%s: %.2f mm, %.4f deg; seen %d, inliers %d, outliers %d, %.3f px RMS\n",
-                r.truth.cameras[c].name.c_str(), dp * 1e3, dr, st.observations, st.inliers, st.outliers, st.rms_px);
-    EXPECT_LT(dp, position_m) << r.truth.cameras[c].name;
-    EXPECT_LT(dr, rotation_deg) << r.truth.cameras[c].name;
+    std::printf("%s: %.2f mm, %.4f deg; seen %d, inliers %d, outliers %d, %.3f px RMS\n", e.camera.c_str(),
+                e.position_m * 1e3, e.rotation_deg, st.observations, st.inliers, st.outliers, st.rms_px);
+    EXPECT_LT(e.position_m, position_m) << e.camera;
+    EXPECT_LT(e.rotation_deg, rotation_deg) << e.camera;
   }
   std::printf("mean reprojection error %.3f px over %zu points\n", result.mean_error_px, result.points.size());
   EXPECT_LT(result.mean_error_px, 0.3);

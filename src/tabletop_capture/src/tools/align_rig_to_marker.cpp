@@ -19,6 +19,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tabletop_capture/calibration/camera_pose_errors.h"
 #include "tabletop_capture/calibration/marker_alignment.h"
 #include "tabletop_capture/calibration/rig_layout_plot.h"
 #include "tabletop_common/cli_args.h"
@@ -168,19 +169,10 @@ int main(int argc, char** argv) {
     if (!truth_file.empty()) {
       const RigDescription truth = loadRigYaml(truth_file);
       r << "against the truth " << truth_file << " (camera centre mm, orientation deg):\n";
-      double worst_mm = 0, worst_deg = 0;
-      for (const auto& c : a.rig.cameras) {
-        const int t = truth.findCamera(c.name);
-        if (t < 0) throw std::runtime_error(truth_file + ": no camera '" + c.name + "'");
-        const auto& tc = truth.cameras[t];
-        const double mm = (c.center() - tc.center()).norm() * 1e3;
-        const double deg = Eigen::AngleAxisd(c.world_T_camera.linear().transpose() * tc.world_T_camera.linear())
-                               .angle() * 180 / M_PI;
-        worst_mm = std::max(worst_mm, mm);
-        worst_deg = std::max(worst_deg, deg);
-        r << "  " << c.name << fmt(": %.3f mm, %.4f deg\n", mm, deg);
-      }
-      r << fmt("  worst: %.3f mm, %.4f deg\n", worst_mm, worst_deg);
+      const auto errors = cameraPoseErrors(a.rig, truth);
+      for (const auto& e : errors) r << "  " << e.camera << fmt(": %.3f mm, %.4f deg\n", e.position_m * 1e3, e.rotation_deg);
+      const CameraPoseError worst = worstPoseError(errors);
+      r << fmt("  worst: %.3f mm, %.4f deg\n", worst.position_m * 1e3, worst.rotation_deg);
     }
     if (a.warnings.empty()) r << "warnings: none\n";
     for (const auto& w : a.warnings) r << "WARNING: " << w << "\n";

@@ -17,6 +17,7 @@
 
 #include <Eigen/Geometry>
 
+#include "tabletop_capture/calibration/camera_pose_errors.h"
 #include "tabletop_capture/calibration/light_images.h"
 #include "tabletop_capture/calibration/point_light_calibration.h"
 #include "tabletop_capture/rig_description.h"
@@ -74,25 +75,13 @@ std::string report(const tabletop_capture::PointLightCalibration& r, const Light
 // Each camera's error against a true rig after the similarity (Umeyama, with scale) of the
 // camera centres onto the true ones: what a simulated sequence's calibration is judged by.
 std::string compareWithTruth(const tabletop_capture::RigDescription& rig, const tabletop_capture::RigDescription& truth) {
-  if (truth.cameras.size() != rig.cameras.size()) throw std::runtime_error("--truth: another number of cameras");
-  const int n = static_cast<int>(rig.cameras.size());
-  Eigen::Matrix3Xd est(3, n), tru(3, n);
-  for (int c = 0; c < n; ++c) {
-    est.col(c) = rig.cameras[c].center();
-    tru.col(c) = truth.cameras[c].center();
-  }
-  const Eigen::Matrix4d m = Eigen::umeyama(est, tru, true);
-  const double s = m.block<3, 1>(0, 0).norm();
-  const Eigen::Matrix3d r = m.block<3, 3>(0, 0) / s;
-  std::string out = "against the truth (similarity of the camera centres, scale " + std::to_string(s) + "):\n";
+  const Eigen::Matrix4d m = tabletop_capture::cameraCentreSimilarity(rig, truth);
+  std::string out = "against the truth (similarity of the camera centres, scale " +
+                    std::to_string(m.block<3, 1>(0, 0).norm()) + "):\n";
   char line[160];
-  for (int c = 0; c < n; ++c) {
-    const auto& e = rig.cameras[c].world_T_camera;
-    const auto& t = truth.cameras[c].world_T_camera;
-    const double dp = (s * r * e.translation() + m.block<3, 1>(0, 3) - t.translation()).norm();
-    const double dr = Eigen::AngleAxisd(t.linear().transpose() * r * e.linear()).angle() * 180 / M_PI;
-    std::snprintf(line, sizeof line, "  %-10s position %.2f mm, orientation %.4f deg\n", rig.cameras[c].name.c_str(),
-                  dp * 1e3, dr);
+  for (const auto& e : tabletop_capture::cameraPoseErrors(rig, truth, m)) {
+    std::snprintf(line, sizeof line, "  %-10s position %.2f mm, orientation %.4f deg\n", e.camera.c_str(),
+                  e.position_m * 1e3, e.rotation_deg);
     out += line;
   }
   return out;
