@@ -5,22 +5,22 @@
 #include <Eigen/SVD>
 
 #include "point_light_problem.h"
+#include "tabletop_capture/calibration/triangulation.h"
 
 namespace tabletop_capture {
 namespace point_light {
 namespace {
 
-// Linear (DLT) triangulation from normalised coordinates: each view gives x P3 - P1 = 0 and
-// y P3 - P2 = 0 for its 3x4 [R|t].
+// Linear (DLT) triangulation of observations `obs` in the problem's frame (NaN at infinity).
 Eigen::Vector3d triangulateLinear(const Problem& problem, const std::vector<int>& obs) {
-  Eigen::MatrixXd a(2 * obs.size(), 4);
-  for (size_t k = 0; k < obs.size(); ++k) {
-    const Observation& o = problem.observations[obs[k]];
-    const Eigen::Matrix<double, 3, 4> p = problem.camera_T_world[o.camera].matrix().topRows<3>();
-    a.row(2 * k) = o.normalised.x() * p.row(2) - p.row(0);
-    a.row(2 * k + 1) = o.normalised.y() * p.row(2) - p.row(1);
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector2d> normalised;
+  for (int k : obs) {
+    const Observation& o = problem.observations[k];
+    poses.push_back(problem.camera_T_world[o.camera]);
+    normalised.push_back(o.normalised);
   }
-  const Eigen::Vector4d x = Eigen::JacobiSVD<Eigen::MatrixXd>(a, Eigen::ComputeFullV).matrixV().col(3);
+  const Eigen::Vector4d x = tabletop_capture::triangulateLinear(poses, normalised);
   if (std::abs(x(3)) < 1e-12) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   return x.head<3>() / x(3);
 }

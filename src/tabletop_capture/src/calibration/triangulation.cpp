@@ -22,28 +22,34 @@ bool residuals(const std::vector<const CameraModel*>& cameras, const std::vector
 
 }  // namespace
 
+Eigen::Vector4d triangulateLinear(const std::vector<Eigen::Isometry3d>& camera_T_world,
+                                  const std::vector<Eigen::Vector2d>& normalised) {
+  if (camera_T_world.size() != normalised.size()) throw std::invalid_argument("triangulateLinear: size mismatch");
+  // DLT: x (P3 X) - P1 X = 0, y (P3 X) - P2 X = 0 with P = [R | t] (camera_T_world) and (x, y)
+  // the undistorted normalised coordinates; the homogeneous solution by SVD.
+  Eigen::MatrixXd A(2 * normalised.size(), 4);
+  for (size_t i = 0; i < normalised.size(); ++i) {
+    const Eigen::Matrix<double, 3, 4> P = camera_T_world[i].matrix().topRows<3>();
+    A.row(2 * i) = normalised[i].x() * P.row(2) - P.row(0);
+    A.row(2 * i + 1) = normalised[i].y() * P.row(2) - P.row(1);
+  }
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(A, Eigen::ComputeFullV).matrixV().col(3);
+}
+
 Triangulation triangulatePoint(const std::vector<const CameraModel*>& cameras,
                                const std::vector<Eigen::Vector2d>& pixels, int iterations) {
   if (cameras.size() != pixels.size()) throw std::invalid_argument("triangulatePoint: size mismatch");
   Triangulation t;
   const size_t n = cameras.size();
   if (n < 2) return t;
-  // DLT: x (P3 X) - P1 X = 0, y (P3 X) - P2 X = 0 with P = [R | t] (camera_T_world) and (x, y)
-  // the undistorted normalised coordinates; the homogeneous solution by SVD.
-  Eigen::MatrixXd A(2 * n, 4);
+  std::vector<Eigen::Isometry3d> poses(n);
+  std::vector<Eigen::Vector2d> normalised(n);
   for (size_t i = 0; i < n; ++i) {
     const CameraModel& c = *cameras[i];
-    const Eigen::Vector2d xd((pixels[i].x() - c.cx) / c.fx, (pixels[i].y() - c.cy) / c.fy);
-    const Eigen::Vector2d x = c.undistort(xd);
-    const Eigen::Isometry3d T = c.cameraTWorld();
-    Eigen::Matrix<double, 3, 4> P;
-    P.leftCols<3>() = T.linear();
-    P.col(3) = T.translation();
-    A.row(2 * i) = x.x() * P.row(2) - P.row(0);
-    A.row(2 * i + 1) = x.y() * P.row(2) - P.row(1);
+    normalised[i] = c.undistort(Eigen::Vector2d((pixels[i].x() - c.cx) / c.fx, (pixels[i].y() - c.cy) / c.fy));
+    poses[i] = c.cameraTWorld();
   }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
-  const Eigen::Vector4d h = svd.matrixV().col(3);
+  const Eigen::Vector4d h = triangulateLinear(poses, normalised);
   if (std::abs(h(3)) < 1e-15) return t;
   Eigen::Vector3d X = h.head<3>() / h(3);
   Eigen::VectorXd r;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "tabletop_capture/camera_model.h"
 
@@ -19,6 +20,12 @@ struct Triangulation {
   double rms_px = 0;
   bool ok = false;  // false: < 2 cameras, or the point is not in front of every camera
 };
+
+// The linear (DLT) step alone, for callers that hold poses and undistorted coordinates already
+// (the point-light calibration's own frame): camera_T_world[i] (world -> camera) saw the point
+// at normalised[i]. Returns the homogeneous point, w not divided out (|w| near 0: at infinity).
+Eigen::Vector4d triangulateLinear(const std::vector<Eigen::Isometry3d>& camera_T_world,
+                                  const std::vector<Eigen::Vector2d>& normalised);
 
 // cameras[i] saw the point at pixels[i] (same length). iterations: Gauss-Newton steps.
 Triangulation triangulatePoint(const std::vector<const CameraModel*>& cameras,
