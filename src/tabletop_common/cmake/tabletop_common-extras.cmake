@@ -84,3 +84,50 @@ function(tabletop_package_dir pkg var)
     message(FATAL_ERROR "tabletop_package_dir: package ${pkg} not found (find it through catkin first)")
   endif()
 endfunction()
+
+# tabletop_find_cuda()
+#   The CUDA backends (issue 20) are built only where nvcc is found: CUDACXX, nvcc on PATH, or
+#   /usr/local/cuda/bin/nvcc; -DTABLETOP_CUDA=OFF leaves them out. Sets TABLETOP_HAVE_CUDA in the
+#   caller's scope and, when ON, enables the CUDA language for sm_75 (Turing and later) and sm_90
+#   (H100/H200) unless CMAKE_CUDA_ARCHITECTURES says otherwise. A build without nvcc compiles
+#   stubs that report "not compiled in", and every path runs on the CPU.
+macro(tabletop_find_cuda)
+  option(TABLETOP_CUDA "Build the CUDA backends where nvcc is found" ON)
+  set(TABLETOP_HAVE_CUDA OFF)
+  if(TABLETOP_CUDA)
+    if(NOT CMAKE_CUDA_COMPILER AND NOT DEFINED ENV{CUDACXX} AND EXISTS /usr/local/cuda/bin/nvcc)
+      set(CMAKE_CUDA_COMPILER /usr/local/cuda/bin/nvcc CACHE FILEPATH "CUDA compiler")
+    endif()
+    include(CheckLanguage)
+    check_language(CUDA)
+    if(CMAKE_CUDA_COMPILER)
+      if(NOT CMAKE_CUDA_ARCHITECTURES)
+        set(CMAKE_CUDA_ARCHITECTURES 75 90)
+      endif()
+      enable_language(CUDA)
+      find_package(CUDAToolkit QUIET)
+      if(CUDAToolkit_FOUND)
+        set(TABLETOP_HAVE_CUDA ON)
+      endif()
+    endif()
+  endif()
+  if(TABLETOP_HAVE_CUDA)
+    message(STATUS "${PROJECT_NAME}: CUDA backend with ${CMAKE_CUDA_COMPILER} (CUDA ${CUDAToolkit_VERSION}), architectures ${CMAKE_CUDA_ARCHITECTURES}")
+  else()
+    message(STATUS "${PROJECT_NAME}: no CUDA backend (TABLETOP_CUDA=${TABLETOP_CUDA}, nvcc not found or disabled); CPU paths only")
+  endif()
+endmacro()
+
+# tabletop_cuda_library(<target> <sources>...)
+#   A static, position-independent CUDA library (linked privately into a package's core shared
+#   library). Arithmetic is IEEE as on the CPU: no FMA contraction (--fmad=false; the shared
+#   __host__ __device__ functions use fmaf explicitly where the CPU uses std::fma), precise
+#   division and square root, so GPU and CPU give the same bytes.
+function(tabletop_cuda_library target)
+  add_library(${target} STATIC ${ARGN})
+  set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON CUDA_STANDARD 17
+    CUDA_STANDARD_REQUIRED ON)
+  target_compile_options(${target} PRIVATE $<$<COMPILE_LANGUAGE:CUDA>:--fmad=false
+    -prec-div=true -prec-sqrt=true --expt-relaxed-constexpr -Xcompiler=-fPIC>)
+  target_link_libraries(${target} PUBLIC CUDA::cudart_static)
+endfunction()
