@@ -11,6 +11,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "psfs_reconstruction/cuda_device.h"
 #include "psfs_reconstruction/image_checks.h"
 #include "tabletop_capture/rig_description.h"
 
@@ -74,6 +75,13 @@ Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const Reconstr
   // Background parameters are checked by constructing a model with them.
   BackgroundModel probe(1, 1, params.background);
   (void)probe;
+  if (params.backend == ReconstructorParams::Backend::kCuda) {
+    const cuda::DeviceInfo& d = cuda::device();
+    if (d.usable)
+      active_backend_ = ReconstructorParams::Backend::kCuda;
+    else
+      backend_warning_ = "backend cuda: " + d.describe() + "; running on the CPU";
+  }
 }
 
 Reconstructor::~Reconstructor() = default;
@@ -348,6 +356,11 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
     if (!c.allFinite()) throw std::invalid_argument("hand ROI centre is not finite");
 
   FrameResult r;
+  if (!backend_warning_.empty()) {  // once: the nodelet logs it
+    r.warnings.push_back(backend_warning_);
+    backend_warning_.clear();
+  }
+  r.backend = active_backend_;
   adoptRig(cameras, &r.warnings);
   const int n = static_cast<int>(cameras_.size());
 

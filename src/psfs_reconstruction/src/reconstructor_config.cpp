@@ -62,6 +62,7 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
       .add("hand_volumes/max_hands", &c->nodelet.max_hand_rois);
   s->add("camera_checks/dark_camera_fraction", &p.dark_camera_fraction)
       .add("camera_checks/saturated_warning_fraction", &p.saturated_warning_fraction);
+  s->add("compute/backend", &c->backend_name);
   s->add("nodelet/threads", &p.threads)
       .add("nodelet/queue_size", &c->nodelet.queue_size)
       .add("nodelet/wait_for_tracker", &c->nodelet.wait_for_tracker)
@@ -77,6 +78,7 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
       .add("nodelet/publish_clouds", &c->nodelet.publish_clouds);
   // The short names the nodelet has always taken as private parameters, and the live ones
   // (cfg/Psfs.cfg).
+  s->alias("backend", "compute/backend");
   for (const char* k : {"threads", "queue_size", "wait_for_tracker", "tracker_timeout", "load_shedding",
                         "background_load_dir", "background_save_dir"})
     s->alias(k, std::string("nodelet/") + k);
@@ -110,6 +112,12 @@ void finishReconstructorConfig(const std::string& path, ReconstructorConfig* cfg
     throw std::runtime_error(where + "nodelet/tracker_timeout: must lie in [0, 600] s");
   if (!(c.nodelet.shed_drop_fraction > 0 && c.nodelet.shed_drop_fraction < 1))
     throw std::runtime_error(where + "nodelet/shed_drop_fraction: must lie in (0, 1)");
+  if (c.backend_name == "cpu")
+    p.backend = ReconstructorParams::Backend::kCpu;
+  else if (c.backend_name == "cuda")
+    p.backend = ReconstructorParams::Backend::kCuda;
+  else
+    throw std::runtime_error(where + "compute/backend: '" + c.backend_name + "' is not cpu or cuda");
   const std::string& skin_model = c.skin_model_path;
   if (!skin_model.empty() && skin_model[0] != '/') c.skin_model_path = directoryOf(path) + "/" + skin_model;
 }

@@ -13,6 +13,7 @@
 
 #include <fstream>
 
+#include "psfs_reconstruction/cuda_device.h"
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/reconstructor_config.h"
 #include "tabletop_sim/simulated_rig.h"
@@ -304,6 +305,36 @@ TEST_F(ReconstructorTest, CamerasMissingFromASetAreLeftOut) {
   EXPECT_TRUE(r.backgroundReady());
 }
 
+// backend cuda gives the CPU's volumes: on the GPU where one is usable (issue 20: classification
+// and fusion give the same bytes), else on the CPU after one warning that says why.
+TEST_F(ReconstructorTest, CudaBackendGivesTheCpuVolumesOrFallsBackOnce) {
+  ReconstructorParams gp = params_;
+  gp.backend = ReconstructorParams::Backend::kCuda;
+  Reconstructor cpu(skin(), params_), gpu(skin(), gp);
+  const bool usable = cuda::device().usable;
+  EXPECT_EQ(gpu.activeBackend(), usable ? ReconstructorParams::Backend::kCuda
+                                        : ReconstructorParams::Backend::kCpu);
+  int fallback_warnings = 0;
+  const Eigen::Vector3d hand = rig_->truth(kLearn + 20).right_hand;
+  for (int f = 0; f < kLearn + 3; ++f) {
+    const int frame = f < kLearn ? f : kLearn + 20 + f;
+    const auto images = rig_->render(frame).images;
+    const FrameResult a = cpu.process(images, cameras(), {hand});
+    const FrameResult b = gpu.process(images, cameras(), {hand});
+    for (const auto& w : b.warnings)
+      fallback_warnings += w.find("backend cuda: no usable CUDA device") != std::string::npos;
+    EXPECT_EQ(b.backend, gpu.activeBackend());
+    ASSERT_EQ(a.status, b.status) << "frame " << frame;
+    if (a.status != FrameResult::Status::kReconstructed) continue;
+    EXPECT_EQ(a.body.data, b.body.data) << "frame " << frame;
+    EXPECT_EQ(a.skin.data, b.skin.data) << "frame " << frame;
+    ASSERT_EQ(a.hands.size(), 1u);
+    ASSERT_EQ(b.hands.size(), 1u);
+    EXPECT_EQ(a.hands[0].data, b.hands[0].data) << "frame " << frame;
+  }
+  EXPECT_EQ(fallback_warnings, usable ? 0 : 1) << "the fallback is reported once, with the reason";
+}
+
 TEST_F(ReconstructorTest, SavedBackgroundReloadsToTheSameVolumes) {
   const fs::path dir = fs::temp_directory_path() / ("psfs_bg_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -413,6 +444,8 @@ TEST(ReconstructorConfig, ShippedFileMatchesTheDefaults) {
   EXPECT_EQ(c.params.dark_camera_fraction, d.dark_camera_fraction);
   EXPECT_EQ(c.params.saturated_warning_fraction, d.saturated_warning_fraction);
   EXPECT_EQ(c.params.threads, d.threads);
+  EXPECT_EQ(c.params.backend, d.backend);
+  EXPECT_EQ(c.backend_name, "cpu");
   EXPECT_EQ(c.params.background.learning_frames, d.background.learning_frames);
   EXPECT_EQ(c.params.background.learning_change_sigmas, d.background.learning_change_sigmas);
   EXPECT_EQ(c.params.background.learning_change_fraction, d.background.learning_change_fraction);
@@ -466,6 +499,7 @@ TEST(ReconstructorConfig, BadFilesNameTheFileAndTheKey) {
   expectError("volume: {hull_occupancy_skin: 0.5, hull_occupancy_foreground: 0.1}", "hull_occupancy_skin");
   expectError("nodelet: {threads: many}", "nodelet/threads: wrong type");
   expectError("hand_volumes: {max_age: 0}", "hand_volumes/max_age");
+  expectError("compute: {backend: opencl}", "compute/backend: 'opencl' is not cpu or cuda");
   expectError("[1, 2", "cannot read");
   std::ofstream(path) << "volume: {dims: [128, 128, 96]}\n";
   EXPECT_EQ(loadReconstructorConfig(path).params.dims, Eigen::Vector3i(128, 128, 96));

@@ -90,6 +90,12 @@ struct ReconstructorParams {
   // empty and is not learned. An empty workspace shows well under 0.1 l; a hand ~0.4 l.
   double learning_max_occupied_litres = 0.3;
   int threads = 0;  // OpenMP threads for every stage (0 = OpenMP default)
+  // Where classification, fusion and the background update run: kCpu, or kCuda (the GPU
+  // backend, cuda_device.h; the same results). kCuda falls back to the CPU, reported once in
+  // FrameResult::warnings, where the backend is not compiled in, no device is usable, or a
+  // CUDA call fails.
+  enum class Backend { kCpu, kCuda };
+  Backend backend = Backend::kCpu;
 
   static PsfsOptions defaultBody() {
     PsfsOptions o;
@@ -132,6 +138,8 @@ struct FrameResult {
   StageTimes times;
   // Things the caller should report (throttled): dark or overexposed cameras, rig changes.
   std::vector<std::string> warnings;
+  // Where this frame set ran (ReconstructorParams::backend, after any fallback).
+  ReconstructorParams::Backend backend = ReconstructorParams::Backend::kCpu;
 };
 
 class Reconstructor {
@@ -161,6 +169,8 @@ class Reconstructor {
 
   bool backgroundReady() const;
   int numCameras() const { return static_cast<int>(cameras_.size()); }
+  // The backend frames run on now: params().backend, or kCpu after a fallback.
+  ReconstructorParams::Backend activeBackend() const { return active_backend_; }
   // Drops the background models: the next frames are learned again. If the scene is not empty
   // for learning_frames sets in a row, the models dropped here are used again (reported).
   void resetBackground();
@@ -214,6 +224,8 @@ class Reconstructor {
   std::vector<cv::Mat> likelihoods_;
   ViewEvidence body_evidence_, skin_evidence_;
   int learning_skips_ = 0;  // changed learning sets in a row
+  ReconstructorParams::Backend active_backend_ = ReconstructorParams::Backend::kCpu;
+  std::string backend_warning_;  // a fallback to report with the next frame set
 };
 
 }  // namespace psfs

@@ -54,6 +54,8 @@ struct ReconstructorConfig {
   // As written in the file until finishReconstructorConfig() resolves it against the file's
   // directory.
   std::string skin_model_path = "skin_gmm.yaml";
+  // compute/backend: "cpu" or "cuda" (ReconstructorParams::backend).
+  std::string backend_name = "cpu";
   NodeletOptions nodelet;
 };
 
