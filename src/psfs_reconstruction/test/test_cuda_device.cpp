@@ -2,10 +2,14 @@
 // describes a usable one well enough for a benchmark report.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "psfs_reconstruction/cuda_device.h"
 
 TEST(CudaDevice, ProbeReportsUsableDeviceOrReason) {
   const psfs::cuda::DeviceInfo& d = psfs::cuda::device();
+  std::printf("[ device   ] compiled in: %s; %s\n", psfs::cuda::compiledIn() ? "yes" : "no",
+              d.describe().c_str());
   EXPECT_EQ(&d, &psfs::cuda::device()) << "probed once";
   if (!psfs::cuda::compiledIn()) {
     EXPECT_FALSE(d.usable);

@@ -64,6 +64,7 @@
 
 #include "psfs_reconstruction/PsfsTuningConfig.h"  // generated from cfg/PsfsTuning.cfg
 #include "psfs_reconstruction/reconstructor.h"
+#include "psfs_reconstruction/cuda_device.h"
 #include "psfs_reconstruction/reconstructor_config.h"
 #include "psfs_reconstruction/ros/volume_msgs.h"
 #include "tabletop_common/pipeline_gate.h"
@@ -119,6 +120,9 @@ class PsfsNodelet : public nodelet::Nodelet {
       gate_.setConfig(gate);
       const GaussianMixture2D skin = GaussianMixture2D::load(cfg_.skin_model_path);
       recon_ = std::make_unique<Reconstructor>(skin, cfg_.params);
+      if (cfg_.params.backend == ReconstructorParams::Backend::kCuda &&
+          recon_->activeBackend() == ReconstructorParams::Backend::kCuda)
+        NODELET_INFO("psfs: backend cuda on %s", cuda::device().describe().c_str());
     } catch (const std::exception& e) {
       fatal_ = e.what();
       NODELET_FATAL("psfs: not started: %s", e.what());
