@@ -163,13 +163,17 @@ struct ClassifyArgs {
   const std::uint8_t* rgb = nullptr;  // rgb8, 3 * width bytes per row
   BackgroundPlanes background;
   std::uint8_t* likelihood = nullptr;  // CV_8UC2 layout, 2 * width bytes per row
-  const float* gain = nullptr;         // this frame's gain (GainPeak::gain), or nullptr
+  const float* gain = nullptr;         // this frame's gain (&GainPeak::gain), or nullptr
   int width = 0, height = 0;
 };
 
 // What one pixel adds to ClassificationStats (integers: any summation order gives the same).
 struct PixelCounts {
   int dark, shadow, saturated, foreground_bytes;
+};
+// Their sums over an image.
+struct ClassifyTotals {
+  unsigned long long dark, shadow, saturated, foreground_bytes;
 };
 
 // Classifies pixel i (row-major index) and writes its two likelihood bytes: one GPU thread.
@@ -246,6 +250,21 @@ PSFS_HD float gainOfBin(int bin, int samples) {
   if (samples < kGainMinSamples) return 1.0f;
   const float g = (float(bin) + 0.5f) / float(kGainBinsPerUnit);
   return g < 0.25f ? 0.25f : (g > 4.0f ? 4.0f : g);
+}
+
+// The gain chosen for one image: the histogram bin (after the walk to the top of its peak), the
+// number of qualifying samples and the gain itself (gainOfBin).
+struct GainPeak {
+  int bin, samples;
+  float gain;
+};
+// Given every bin's window, the brightest candidate bin and the number of samples.
+PSFS_HD GainPeak gainPeakOf(const int* window, int candidate, int samples) {
+  GainPeak p;
+  p.bin = gainPeakTop(window, candidate);
+  p.samples = samples;
+  p.gain = gainOfBin(p.bin, samples);
+  return p;
 }
 
 struct GainArgs {

@@ -350,13 +350,9 @@ double PixelClassifier::estimateGain(const cv::Mat& rgb, const BackgroundModel& 
     window[b] = pixel::gainWindow(hist.data(), b);
     max_count = std::max(max_count, window[b]);
   }
-  int best = 0;
-  for (int b = pixel::kGainBins - 1; b >= 0; --b)
-    if (pixel::gainCandidate(window[b], max_count)) {
-      best = pixel::gainPeakTop(window.data(), b);  // the top of this peak
-      break;
-    }
-  return pixel::gainOfBin(best, n);
+  int candidate = pixel::kGainBins - 1;
+  while (candidate > 0 && !pixel::gainCandidate(window[candidate], max_count)) --candidate;
+  return pixel::gainPeakOf(window.data(), candidate, n).gain;  // at the top of its peak
 }
 
 ClassificationStats PixelClassifier::classify(const cv::Mat& rgb, const BackgroundModel& background,
