@@ -274,18 +274,21 @@ void GpuPixelStage::updateBackground(const std::vector<cv::Mat>& masks,
   if (!update.empty() && update.size() != n)
     throw std::invalid_argument("GpuPixelStage: " + std::to_string(update.size()) +
                                 " update flags for " + std::to_string(n) + " cameras");
+  // Everything is checked before any camera is updated.
+  std::vector<bool> want(n);
   for (std::size_t c = 0; c < n; ++c) {
-    const bool want = update.empty() ? m.classified[c] : bool(update[c]);
-    if (!want) continue;
-    if (!m.classified[c])
+    want[c] = update.empty() ? m.classified[c] : bool(update[c]);
+    if (want[c] && !m.classified[c])
       throw std::logic_error("GpuPixelStage::updateBackground: " + camName(c) +
                              " had no image in the last classified frame");
+    if (want[c] && !masks.empty() && !masks[c].empty())
+      checkMask(masks[c], m.sizes[c].width, m.sizes[c].height, camName(c));
+  }
+  for (std::size_t c = 0; c < n; ++c) {
+    if (!want[c]) continue;
     const detail::PixelCameraBuffers& b = dev.buffers(int(c));
     const bool has_mask = !masks.empty() && !masks[c].empty();
-    if (has_mask) {
-      checkMask(masks[c], b.width, b.height, camName(c));
-      stage(masks[c], b.host_mask);
-    }
+    if (has_mask) stage(masks[c], b.host_mask);
     dev.update(int(c), updateArgs(m.background_params[c], b.rgb, has_mask ? b.mask : nullptr,
                                   b.background, b.width * b.height),
                has_mask);

@@ -88,7 +88,8 @@ class GpuPixelStage {
   // Selective update of the device models with the last classified frame's images. masks: per
   // camera CV_8UC1 (nonzero = foreground, kept) or empty (every pixel updated); update: which
   // cameras to update (empty = every camera that had an image). Throws std::logic_error for a
-  // camera without an image in the last frame.
+  // camera without an image in the last frame, std::invalid_argument for a bad mask; both
+  // before any model changes.
   void updateBackground(const std::vector<cv::Mat>& masks, const std::vector<bool>& update = {});
 
   // Device and pinned allocations made so far: constant from the second frame on.

@@ -24,6 +24,8 @@
 // evaluated directly rather than through a colour table: with K = 2 that costs two vector
 // exps per pixel, and it is exact, whereas the thesis' 256x256 rg table is off by up to 52/255
 // on the steep flank of the skin cluster (3 % of all colours by more than 5/255).
+// The per-pixel arithmetic of those loops is written once (src/pixel_arithmetic.h) and shared
+// with the GPU pixel stage (gpu_pixel_stage.h), which therefore gives the same bytes.
 #pragma once
 
 #include <cstdint>
