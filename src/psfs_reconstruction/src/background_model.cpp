@@ -12,6 +12,7 @@
 
 #include "psfs_reconstruction/image_checks.h"
 #include "classifier_kernels.h"
+#include "pixel_arithmetic.h"
 
 namespace psfs {
 namespace {
@@ -59,21 +60,9 @@ PSFS_ALWAYS_INLINE void updateRowParams(int w, const float* __restrict r, const 
                                         float* __restrict vr, float* __restrict vg,
                                         float* __restrict vi, float* __restrict sr,
                                         float* __restrict sg) {
-  for (int x = 0; x < w; ++x) {
-    const float dr = r[x] - mr[x], dg = g[x] - mg[x], di = in[x] - mi[x];
-    mr[x] += k[x] * dr;
-    mg[x] += k[x] * dg;
-    mi[x] += k[x] * di;
-    // Variance from the deviation to the previous mean, as in an exponential moving average.
-    const float nvr = vr[x] + k[x] * (dr * dr - vr[x]);
-    const float nvg = vg[x] + k[x] * (dg * dg - vg[x]);
-    const float nvi = vi[x] + k[x] * (di * di - vi[x]);
-    vr[x] = nvr > floor_rg ? nvr : floor_rg;
-    vg[x] = nvg > floor_rg ? nvg : floor_rg;
-    vi[x] = nvi > floor_i ? nvi : floor_i;
-    sr[x] = 1.0f / std::sqrt(2.0f * vr[x]);
-    sg[x] = 1.0f / std::sqrt(2.0f * vg[x]);
-  }
+  for (int x = 0; x < w; ++x)
+    pixel::updateBackgroundPixel({r[x], g[x], in[x]}, k[x], floor_rg, floor_i, mr[x], mg[x], mi[x],
+                                 vr[x], vg[x], vi[x], sr[x], sg[x]);
 }
 
 // One row of the selective update. A function of its own so the restrict parameters let GCC
@@ -91,7 +80,7 @@ void updateRow(int w, const std::uint8_t* __restrict rgb, const std::uint8_t* __
   float* __restrict k = buf + 3 * w;
   kernels::rgbRowToRgI(rgb, w, r, g, in);
   if (mask) {
-    for (int x = 0; x < w; ++x) k[x] = mask[x] ? 0.0f : alpha;  // (1 - f) alpha
+    for (int x = 0; x < w; ++x) k[x] = pixel::updateWeight(mask[x], alpha);  // (1 - f) alpha
   } else {
     for (int x = 0; x < w; ++x) k[x] = alpha;
   }
@@ -229,8 +218,8 @@ void BackgroundModel::finalizeLearning() {
 
 void BackgroundModel::refreshScales(std::size_t begin, std::size_t end) {
   for (std::size_t i = begin; i < end; ++i) {
-    scale_r_[i] = 1.0f / std::sqrt(2.0f * var_r_[i]);
-    scale_g_[i] = 1.0f / std::sqrt(2.0f * var_g_[i]);
+    scale_r_[i] = pixel::backgroundScale(var_r_[i]);
+    scale_g_[i] = pixel::backgroundScale(var_g_[i]);
   }
 }
 
@@ -275,6 +264,22 @@ BackgroundPlanes BackgroundModel::planes() const {
   p.scale_r = scale_r_.data();
   p.scale_g = scale_g_.data();
   p.var_intensity = var_i_.data();
+  p.var_r = var_r_.data();
+  p.var_g = var_g_.data();
+  return p;
+}
+
+MutableBackgroundPlanes BackgroundModel::mutablePlanes() {
+  if (!ready_) throw std::logic_error("background model: planes are written only once learned");
+  MutableBackgroundPlanes p;
+  p.mean_r = mean_r_.data();
+  p.mean_g = mean_g_.data();
+  p.mean_intensity = mean_i_.data();
+  p.scale_r = scale_r_.data();
+  p.scale_g = scale_g_.data();
+  p.var_intensity = var_i_.data();
+  p.var_r = var_r_.data();
+  p.var_g = var_g_.data();
   return p;
 }
 

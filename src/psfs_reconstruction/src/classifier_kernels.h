@@ -1,7 +1,8 @@
 // Private row kernels shared by the background model and the pixel classifier. Written as
 // plain loops over contiguous float rows without branches or library calls so that GCC/Clang
 // auto-vectorise them at -O3 (and again for AVX2/SSE4.1 via PSFS_TARGET_CLONES); kept in one
-// place so the learning, update and classification paths convert colours identically.
+// place so the learning, update and classification paths convert colours identically. The
+// per-pixel arithmetic itself is in pixel_arithmetic.h, shared with the CUDA kernels.
 // Build with -fno-trapping-math -fno-math-errno: without them GCC keeps the float selects
 // (a < b ? x : y) and std::sqrt as branches and leaves these loops scalar (several times
 // slower, same results). Nothing here reads floating-point exception flags or errno.
@@ -10,7 +11,8 @@
 #pragma once
 
 #include <cstdint>
-#include <cstring>
+
+#include "pixel_arithmetic.h"
 
 namespace psfs {
 namespace kernels {
@@ -33,34 +35,15 @@ namespace kernels {
 #define PSFS_ALWAYS_INLINE inline
 #endif
 
-// exp(-x) for x >= 0 (x is clamped to [0, 87]), relative error < 4e-6: 2^t = 2^i * 2^f with
-// i = trunc(t), f in (-1, 0] and a degree-4 polynomial for 2^f (relative least-squares fit on
-// [-1, 0]). Branch-free and vectorisable, where std::exp is a library call that blocks
-// vectorisation. The output needs 1/255; P = 1/(1 + e) moves by < 1e-6 for this error.
-PSFS_ALWAYS_INLINE float expNeg(float x) {
-  x = x < 0.0f ? 0.0f : (x > 87.0f ? 87.0f : x);
-  const float t = -x * 1.4426950408889634f;  // log2(e)
-  const int i = int(t);                      // trunc towards 0 = ceil for t <= 0
-  const float f = t - float(i);              // (-1, 0]
-  const float p =
-      1.0f + f * (0.69306009f + f * (0.23943884f + f * (0.053195773f + f * 0.0068184414f)));
-  const std::int32_t bits = (i + 127) << 23;  // 2^i, i >= -126 so always a normal float
-  float scale;
-  std::memcpy(&scale, &bits, sizeof(scale));
-  return p * scale;
-}
-
 // One interleaved rgb8 row -> normalised r, g and intensity I = (R+G+B)/3 (color_space.h).
 // Black pixels get the grey point (1/3, 1/3), as toNormalizedRgI() does.
 PSFS_ALWAYS_INLINE void rgbRowToRgI(const std::uint8_t* __restrict rgb, int n, float* __restrict r,
                                     float* __restrict g, float* __restrict intensity) {
   for (int x = 0; x < n; ++x) {
-    const float R = float(rgb[3 * x]), G = float(rgb[3 * x + 1]), B = float(rgb[3 * x + 2]);
-    const float s = R + G + B;
-    const float inv = 1.0f / (s > 0.0f ? s : 1.0f);
-    r[x] = s > 0.0f ? R * inv : (1.0f / 3.0f);
-    g[x] = s > 0.0f ? G * inv : (1.0f / 3.0f);
-    intensity[x] = s * (1.0f / 3.0f);
+    const pixel::RgI c = pixel::rgbToRgI(rgb[3 * x], rgb[3 * x + 1], rgb[3 * x + 2]);
+    r[x] = c.r;
+    g[x] = c.g;
+    intensity[x] = c.intensity;
   }
 }
 

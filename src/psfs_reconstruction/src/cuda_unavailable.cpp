@@ -1,6 +1,7 @@
 // The CUDA backend's entry points in a build without nvcc: nothing is compiled in, and every
 // caller falls back to the CPU path.
 #include "psfs_reconstruction/cuda_device.h"
+#include "pixel_pipeline_device.h"
 
 namespace psfs {
 namespace cuda {
@@ -17,4 +18,10 @@ const DeviceInfo& device() {
 }
 
 }  // namespace cuda
+
+namespace detail {
+// GpuPixelStage: no device side in this build (GpuPixelStage::usable() is false).
+std::unique_ptr<PixelPipelineDevice> makePixelPipelineDevice() { return nullptr; }
+}  // namespace detail
+
 }  // namespace psfs

@@ -13,6 +13,7 @@
 #include "psfs_reconstruction/color_space.h"
 #include "psfs_reconstruction/image_checks.h"
 #include "classifier_kernels.h"
+#include "pixel_stage_host.h"
 
 namespace psfs {
 namespace {
@@ -55,15 +56,6 @@ void validateParams(const PixelClassifierParams& p) {
         "pixel classifier: the intensity model needs shadow_min_intensity_ratio < "
         "shadow_max_intensity_ratio");
 }
-
-// The gain estimate's histogram: ratios I / I_bg in [0, 4) in steps of 1/256.
-constexpr int kGainBinsPerUnit = 256;
-constexpr int kGainBins = 4 * kGainBinsPerUnit;
-constexpr int kGainMinSamples = 64;
-constexpr double kGainMin = 0.25, kGainMax = 4.0;
-// Background intensities below this (8-bit levels) are too noisy for a ratio.
-constexpr float kGainMinBackground = 16.0f;
-constexpr float kGainMaxIntensity = 250.0f;  // saturated pixels clip the ratio
 
 std::uint8_t toByte(double p) {
   const double v = std::floor(p * 255.0 + 0.5);
@@ -109,9 +101,9 @@ void PixelClassifier::setPriors(const ClassPriors& priors) {
   priors_ = priors;
 }
 
-void PixelClassifier::rebuild() {
-  skin_terms_.clear();
-  for (const auto& c : skin_.components()) {
+std::vector<detail::SkinKernelTerm> skinKernelTerms(const GaussianMixture2D& skin) {
+  std::vector<detail::SkinKernelTerm> terms;
+  for (const auto& c : skin.components()) {
     const Eigen::Matrix2d half_inv = 0.5 * c.covariance.inverse();
     detail::SkinKernelTerm t;
     t.mean_r = float(c.mean.x());
@@ -120,31 +112,60 @@ void PixelClassifier::rebuild() {
     t.b2 = float(2.0 * half_inv(0, 1));
     t.c = float(half_inv(1, 1));
     t.weight = float(c.weight / (2.0 * kPi * std::sqrt(c.covariance.determinant())));
-    skin_terms_.push_back(t);
+    terms.push_back(t);
   }
+  return terms;
 }
+
+pixel::PixelConstants pixelConstants(const PixelClassifierParams& params,
+                                     const ClassPriors& priors) {
+  pixel::PixelConstants k;
+  const double pF = clampPrior(priors.foreground), pS = clampPrior(priors.skin);
+  k.odds_bg = float((1.0 - pF) / pF);
+  k.odds_skin = float((1.0 - pS) / pS);
+  k.priorF = float(priors.foreground);
+  k.priorS = float(priors.skin);
+  k.outF = params.foreground_outlier * k.priorF;
+  k.keepF = 1.0f - params.foreground_outlier;
+  k.outS = params.skin_outlier * k.priorS;
+  k.keepS = 1.0f - params.skin_outlier;
+  k.shadow_r2 = params.shadow_suppression
+                    ? params.shadow_chroma_radius * params.shadow_chroma_radius
+                    : -1.0f;
+  k.lo = params.shadow_min_intensity_ratio;
+  k.hi = params.shadow_max_intensity_ratio;
+  k.min_i = params.min_chroma_intensity;
+  k.use_i = params.intensity_model ? 1.0f : 0.0f;
+  k.gain = 1.0f;
+  k.tol2 = params.gain_tolerance * params.gain_tolerance;
+  k.keep_n = 256.0f * (1.0f - params.shadow_weight);
+  k.band_u = params.intensity_model
+                 ? 256.0f * params.shadow_weight /
+                       (params.shadow_max_intensity_ratio - params.shadow_min_intensity_ratio)
+                 : 0.0f;
+  k.dark_skin = params.intensity_model ? k.outS : k.priorS;
+  return k;
+}
+
+bool gainCompensated(const PixelClassifierParams& params) {
+  return params.intensity_model && params.gain_compensation;
+}
+
+pixel::GainConstants gainConstants(const PixelClassifierParams& params) {
+  pixel::GainConstants g;
+  // Background chroma: within twice the shadow cylinder (a shadow keeps the chroma, a person
+  // mostly does not), so the mode is the light's gain even with half the view occluded.
+  const float rad = 2.0f * std::max(params.shadow_chroma_radius, 0.01f);
+  g.chroma_r2 = rad * rad;
+  g.min_intensity = std::max(params.min_chroma_intensity, 1.0f);
+  return g;
+}
+
+void PixelClassifier::rebuild() { skin_terms_ = skinKernelTerms(skin_); }
 
 // ---- fast path ------------------------------------------------------------------------------
 
 namespace {
-
-// Per-frame constants of the row kernel (from the priors and parameters).
-struct RowConstants {
-  float odds_bg;                   // P(notF) / P(F), priors clamped
-  float odds_skin;                 // P(notS) / P(S)
-  float outF, keepF, outS, keepS;  // outlier model: eF P(F), 1 - eF, eS P(S), 1 - eS
-  float priorF, priorS;
-  float shadow_r2;  // squared cylinder radius; < 0 disables the cylinder
-  float lo, hi;     // intensity ratio bounds
-  float min_i;      // dark-pixel threshold
-  // Intensity model (PixelClassifierParams::intensity_model); use_i = 0 or 1.
-  float use_i;
-  float gain;                    // this camera's g
-  float tol2;                    // gain_tolerance^2
-  float keep_n;                  // 256 (1 - w): the Gaussian's share, per 1/256 fg density
-  float band_u;                  // 256 w / (max - min): the band's density times g I_bg
-  float dark_skin;               // P'(S|c) of a dark pixel: P(S), or eS P(S) (intensity model)
-};
 
 // Scratch for one row: 7 float rows (9 KB at 320 px: stays in L1).
 struct RowScratch {
@@ -157,42 +178,20 @@ struct RowScratch {
 // the no-alias guarantee and -fno-trapping-math every loop vectorises at -O3.
 
 // Foreground term: background Gaussian, shadow cylinder, outlier model, dark-pixel rule.
-PSFS_ALWAYS_INLINE void foregroundRow(const RowConstants& k, int w, const float* __restrict r,
-                                      const float* __restrict g, const float* __restrict in,
-                                      const float* __restrict mr, const float* __restrict mg,
-                                      const float* __restrict mi, const float* __restrict sr,
-                                      const float* __restrict sg, const float* __restrict vi,
-                                      float* __restrict pf, float* __restrict dark,
-                                      float* __restrict shadow) {
-  constexpr float inv_pi = float(1.0 / kPi);
-  const float odds = k.odds_bg, min_i = k.min_i, r2 = k.shadow_r2, lo = k.lo, hi = k.hi;
-  const float outF = k.outF, keepF = k.keepF, priorF = k.priorF;
-  const float use_i = k.use_i, gain = k.gain, tol2 = k.tol2, keep_n = k.keep_n;
-  const float band_u = k.band_u;
+PSFS_ALWAYS_INLINE void foregroundRow(const pixel::PixelConstants& constants, int w,
+                                      const float* __restrict r, const float* __restrict g,
+                                      const float* __restrict in, const float* __restrict mr,
+                                      const float* __restrict mg, const float* __restrict mi,
+                                      const float* __restrict sr, const float* __restrict sg,
+                                      const float* __restrict vi, float* __restrict pf,
+                                      float* __restrict dark, float* __restrict shadow) {
+  const pixel::PixelConstants k = constants;  // a local copy stays in registers
   for (int x = 0; x < w; ++x) {
-    const float dr = r[x] - mr[x], dg = g[x] - mg[x];
-    const float ur = dr * sr[x], ug = dg * sg[x];
-    const float ix = in[x], mix = gain * mi[x];
-    const float d = ix < min_i ? 1.0f : 0.0f;
-    // p(rg|notF) = exp(-m^2/2) / (2 pi s_r s_g) = (scale_r scale_g / pi) exp(-(ur^2 + ug^2));
-    // a dark pixel's chroma is noise: the same density as the foreground's (1).
-    const float p_rg = sr[x] * sg[x] * inv_pi * kernels::expNeg(ur * ur + ug * ug);
-    // 256 p(I|notF): Gaussian around g I_bg plus the uniform shadow/highlight band.
-    const float di = ix - mix;
-    const float half_inv_var = 0.5f / (vi[x] + tol2 * mix * mix);
-    const float n_i = std::sqrt(half_inv_var * inv_pi) * kernels::expNeg(di * di * half_inv_var);
-    const float in_band = (ix >= lo * mix ? 1.0f : 0.0f) * (ix <= hi * mix ? 1.0f : 0.0f);
-    const float q_i = keep_n * n_i + in_band * band_u / (mix > 1.0f ? mix : 1.0f);
-    const float p_rg_i = d * 1.0f + (1.0f - d) * p_rg;
-    const float p_bg = use_i * (p_rg_i * q_i) + (1.0f - use_i) * p_rg;
-    const float p_fc = 1.0f / (1.0f + odds * p_bg);
-    const float sh_chroma = dr * dr + dg * dg < r2 ? 1.0f : 0.0f;
-    const float sh = sh_chroma * in_band * (1.0f - d);  // the cylinder: chroma and the band
-    const float f = outF + keepF * (1.0f - sh) * p_fc;
-    const float prior_if_dark = (1.0f - use_i) * d;  // without intensity, dark = no evidence
-    pf[x] = prior_if_dark * priorF + (1.0f - prior_if_dark) * f;
-    dark[x] = d;
-    shadow[x] = p_fc > 0.5f ? sh : 0.0f;  // counted only where the cylinder changed the call
+    const pixel::ForegroundTerm t =
+        pixel::foregroundTerm(k, {r[x], g[x], in[x]}, mr[x], mg[x], mi[x], sr[x], sg[x], vi[x]);
+    pf[x] = t.p;
+    dark[x] = t.dark;
+    shadow[x] = t.shadow;
   }
 }
 
@@ -200,23 +199,18 @@ PSFS_ALWAYS_INLINE void foregroundRow(const RowConstants& k, int w, const float*
 PSFS_ALWAYS_INLINE void skinComponentRow(const detail::SkinKernelTerm& t, int w,
                                          const float* __restrict r, const float* __restrict g,
                                          float* __restrict ps) {
-  for (int x = 0; x < w; ++x) {
-    const float dr = r[x] - t.mean_r, dg = g[x] - t.mean_g;
-    ps[x] += t.weight * kernels::expNeg(t.a * dr * dr + t.b2 * dr * dg + t.c * dg * dg);
-  }
+  for (int x = 0; x < w; ++x) ps[x] += pixel::skinDensity(t, r[x], g[x]);
 }
 
 // P'(S|c), the product, and quantisation to the two interleaved output channels.
-PSFS_ALWAYS_INLINE void outputRow(const RowConstants& k, int w, const float* __restrict pf,
-                                  const float* __restrict ps, const float* __restrict dark,
-                                  std::uint8_t* __restrict dst) {
-  const float odds = k.odds_skin, outS = k.outS, keepS = k.keepS;
-  const float dark_s = k.dark_skin;
+PSFS_ALWAYS_INLINE void outputRow(const pixel::PixelConstants& constants, int w,
+                                  const float* __restrict pf, const float* __restrict ps,
+                                  const float* __restrict dark, std::uint8_t* __restrict dst) {
+  const pixel::PixelConstants k = constants;
   for (int x = 0; x < w; ++x) {
-    const float p_sc = ps[x] / (ps[x] + odds);  // = p P(S) / (p P(S) + P(notS))
-    const float s = dark[x] * dark_s + (1.0f - dark[x]) * (outS + keepS * p_sc);
-    dst[2 * x + 0] = std::uint8_t(int(pf[x] * 255.0f + 0.5f));
-    dst[2 * x + 1] = std::uint8_t(int(pf[x] * s * 255.0f + 0.5f));
+    const pixel::LikelihoodBytes b = pixel::likelihoodBytes(k, pf[x], ps[x], dark[x]);
+    dst[2 * x + 0] = b.foreground;
+    dst[2 * x + 1] = b.skin;
   }
 }
 
@@ -232,7 +226,7 @@ PSFS_ALWAYS_INLINE RowStats rowStats(int w, const float* __restrict dark,
     n_shadow += int(shadow[x]);
   }
   for (int x = 0; x < w; ++x)
-    n_sat += (rgb[3 * x] == 255) | (rgb[3 * x + 1] == 255) | (rgb[3 * x + 2] == 255);
+    n_sat += pixel::saturated(rgb[3 * x], rgb[3 * x + 1], rgb[3 * x + 2]);
   for (int x = 0; x < w; ++x) sum_f += out[2 * x];
   RowStats st;
   st.dark = n_dark;
@@ -244,7 +238,7 @@ PSFS_ALWAYS_INLINE RowStats rowStats(int w, const float* __restrict dark,
 
 // The unit of work of the OpenMP loop, compiled per instruction set (PSFS_TARGET_CLONES).
 PSFS_TARGET_CLONES
-RowStats classifyRow(const RowConstants& k, const detail::SkinKernelTerm* terms, int K,
+RowStats classifyRow(const pixel::PixelConstants& k, const detail::SkinKernelTerm* terms, int K,
                      const std::uint8_t* src, int w, const BackgroundPlanes& P, std::size_t o,
                      RowScratch& scratch, std::uint8_t* dst) {
   float* r = scratch.f.data();
@@ -277,33 +271,9 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
   const int total_rows = row_start[cameras];
   std::vector<RowStats> row_stats(total_rows);
 
-  RowConstants k;
-  const double pF = clampPrior(priors_.foreground), pS = clampPrior(priors_.skin);
-  k.odds_bg = float((1.0 - pF) / pF);
-  k.odds_skin = float((1.0 - pS) / pS);
-  k.priorF = float(priors_.foreground);
-  k.priorS = float(priors_.skin);
-  k.outF = params_.foreground_outlier * k.priorF;
-  k.keepF = 1.0f - params_.foreground_outlier;
-  k.outS = params_.skin_outlier * k.priorS;
-  k.keepS = 1.0f - params_.skin_outlier;
-  k.shadow_r2 = params_.shadow_suppression
-                    ? params_.shadow_chroma_radius * params_.shadow_chroma_radius
-                    : -1.0f;
-  k.lo = params_.shadow_min_intensity_ratio;
-  k.hi = params_.shadow_max_intensity_ratio;
-  k.min_i = params_.min_chroma_intensity;
-  k.use_i = params_.intensity_model ? 1.0f : 0.0f;
-  k.gain = 1.0f;
-  k.tol2 = params_.gain_tolerance * params_.gain_tolerance;
-  k.keep_n = 256.0f * (1.0f - params_.shadow_weight);
-  k.band_u = params_.intensity_model
-                 ? 256.0f * params_.shadow_weight /
-                       (params_.shadow_max_intensity_ratio - params_.shadow_min_intensity_ratio)
-                 : 0.0f;
-  k.dark_skin = params_.intensity_model ? k.outS : k.priorS;
+  const pixel::PixelConstants k = pixelConstants(params_, priors_);
   // Per camera: its gain this frame.
-  std::vector<RowConstants> ks(cameras, k);
+  std::vector<pixel::PixelConstants> ks(cameras, k);
   std::vector<double> gains(cameras, 1.0);
   for (int c = 0; c < cameras; ++c) {
     gains[c] = estimateGain(rgb[c], *bg[c]);
@@ -351,54 +321,38 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
 }
 
 double PixelClassifier::estimateGain(const cv::Mat& rgb, const BackgroundModel& background) const {
-  if (!params_.intensity_model || !params_.gain_compensation) return 1.0;
+  if (!gainCompensated(params_)) return 1.0;
   checkRgb8(rgb, background.width(), background.height(), "pixel classifier (gain)");
   const BackgroundPlanes P = background.planes();
-  // Background chroma: within twice the shadow cylinder (a shadow keeps the chroma, a person
-  // mostly does not), so the mode is the light's gain even with half the view occluded.
-  const float rad = 2.0f * std::max(params_.shadow_chroma_radius, 0.01f);
-  const float r2 = rad * rad;
-  const float min_i = std::max(params_.min_chroma_intensity, 1.0f);
-  std::vector<int> hist(kGainBins, 0);
+  const pixel::GainConstants c = gainConstants(params_);
+  std::vector<int> hist(pixel::kGainBins, 0);
   int n = 0;
   for (int y = 0; y < rgb.rows; y += 2) {
     const std::uint8_t* src = rgb.ptr<std::uint8_t>(y);
     const std::size_t row = std::size_t(y) * std::size_t(rgb.cols);
     for (int x = 0; x < rgb.cols; x += 2) {
-      const float R = src[3 * x], G = src[3 * x + 1], B = src[3 * x + 2];
-      const float sum = R + G + B;
-      const float I = sum * (1.0f / 3.0f);
-      const float mi = P.mean_intensity[row + x];
-      if (I < min_i || I > kGainMaxIntensity || mi < kGainMinBackground) continue;
-      const float dr = R / sum - P.mean_r[row + x], dg = G / sum - P.mean_g[row + x];
-      if (dr * dr + dg * dg >= r2) continue;
-      const int bin = int(I / mi * float(kGainBinsPerUnit));
-      if (bin >= kGainBins) continue;
+      const int bin = pixel::gainBin(c, src[3 * x], src[3 * x + 1], src[3 * x + 2],
+                                     P.mean_r[row + x], P.mean_g[row + x],
+                                     P.mean_intensity[row + x]);
+      if (bin < 0) continue;
       ++hist[bin];
       ++n;
     }
   }
-  if (n < kGainMinSamples) return 1.0;
+  if (n < pixel::kGainMinSamples) return 1.0;
   // Peaks over 5 bins (+-0.8 %, about the noise of a ratio): the lit background is one sharp
   // peak, a person's background-coloured clothes spread over many ratios, and a cast shadow
   // forms a second, darker peak that may be as large. Shadows only darken: the gain is the
   // brightest peak that holds at least half as many pixels as the largest.
-  std::vector<int> window(kGainBins, 0);
+  std::vector<int> window(pixel::kGainBins, 0);
   int max_count = 0;
-  for (int b = 0; b < kGainBins; ++b) {
-    for (int j = std::max(0, b - 2); j <= std::min(kGainBins - 1, b + 2); ++j) window[b] += hist[j];
+  for (int b = 0; b < pixel::kGainBins; ++b) {
+    window[b] = pixel::gainWindow(hist.data(), b);
     max_count = std::max(max_count, window[b]);
   }
-  int best = 0;
-  for (int b = kGainBins - 1; b >= 0; --b)
-    if (2 * window[b] >= max_count) {
-      // The top of this peak: walk up while the window count grows.
-      best = b;
-      while (best > 0 && window[best - 1] > window[best]) --best;
-      break;
-    }
-  const double g = (best + 0.5) / kGainBinsPerUnit;
-  return std::min(kGainMax, std::max(kGainMin, g));
+  int candidate = pixel::kGainBins - 1;
+  while (candidate > 0 && !pixel::gainCandidate(window[candidate], max_count)) --candidate;
+  return pixel::gainPeakOf(window.data(), candidate, n).gain;  // at the top of its peak
 }
 
 ClassificationStats PixelClassifier::classify(const cv::Mat& rgb, const BackgroundModel& background,

@@ -9,10 +9,15 @@
 
 #include "cpu_dispatch.h"
 #include "footprint_filter.h"
+#include "pixel_arithmetic.h"
 #include "psfs_reconstruction/projection_table.h"
 
 namespace psfs {
 namespace {
+
+// The GPU pixel stage writes the same arrays through pixel_arithmetic.h.
+static_assert(ViewEvidence::kNoEvidence == pixel::kNoEvidenceTerm, "no-evidence term");
+static_assert(ViewEvidence::kQuadPad == pixel::kPairPad, "pair border");
 
 const std::array<int16_t, 256>& termTable() {
   static const std::array<int16_t, 256> table = [] {
@@ -75,7 +80,7 @@ void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int t
     const size_t np = size_t(W) * H;
     const size_t level_size = size_t(W) * (H + 1);  // a level and its guard row
     const int levels = std::max(L, 1);
-    out.terms.resize(level_size * (levels - 1) + np + 3);
+    out.terms.resize(level_size * (levels - 1) + np + pixel::kTermGuard);
     out.likelihood.resize(np + 4);
     out.inactive_pixels = in.active.empty() ? 0 : np - static_cast<size_t>(cv::countNonZero(in.active));
     for (int v = 0; v < H; ++v) {
@@ -104,10 +109,11 @@ void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int t
         for (int v = 0; v < H; ++v) {
           const uint8_t* act = in.active.ptr<uint8_t>(v);
           int16_t* tm = level + size_t(v) * W;
-          for (int u = 0; u < W; ++u) tm[u] = act[u] == 0 ? kNoEvidence : tm[u];
+          for (int u = 0; u < W; ++u) tm[u] = pixel::maskedTerm(tm[u], act[u]);
         }
       // Guard row (the last level's guard is the plain layout's guard pixel plus 3 entries).
-      std::fill(level + np, level + (l + 1 < levels ? level_size : np + 3), kNoEvidence);
+      std::fill(level + np, level + (l + 1 < levels ? level_size : np + pixel::kTermGuard),
+                kNoEvidence);
     }
     if (!bilinear) {
       out.pairs.clear();
@@ -116,16 +122,16 @@ void ViewEvidence::set(const std::vector<ViewImage>& views, bool bilinear, int t
     // Pair (u, v) of the padded image holds L(u, v) and L(u, v + 1) with coordinates clamped to
     // the image (replicated border), u, v from -kQuadPad.
     const int QS = W + 2 * kQuadPad, QH = H + 2 * kQuadPad;
-    out.pairs.resize(size_t(QS) * QH + 2);
+    out.pairs.resize(size_t(QS) * QH + pixel::kPairGuard);
     for (int vv = 0; vv < QH; ++vv) {
       const uint8_t* r0 = &out.likelihood[size_t(std::clamp(vv - kQuadPad, 0, H - 1)) * W];
       const uint8_t* r1 = &out.likelihood[size_t(std::clamp(vv - kQuadPad + 1, 0, H - 1)) * W];
       uint16_t* q = &out.pairs[size_t(vv) * QS];
-      const uint16_t left = uint16_t(r0[0] | r1[0] << 8);
-      const uint16_t right = uint16_t(r0[W - 1] | r1[W - 1] << 8);
+      const uint16_t left = pixel::evidencePair(r0[0], r1[0]);
+      const uint16_t right = pixel::evidencePair(r0[W - 1], r1[W - 1]);
       for (int uu = 0; uu < kQuadPad; ++uu) q[uu] = left, q[QS - 1 - uu] = right;
       uint16_t* qi = q + kQuadPad;
-      for (int u = 0; u < W; ++u) qi[u] = uint16_t(r0[u] | r1[u] << 8);  // vectorised
+      for (int u = 0; u < W; ++u) qi[u] = pixel::evidencePair(r0[u], r1[u]);  // vectorised
     }
     out.pairs[size_t(QS) * QH] = out.pairs[size_t(QS) * QH + 1] = 0;
   }

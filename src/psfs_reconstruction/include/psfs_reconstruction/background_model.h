@@ -23,6 +23,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "psfs_reconstruction/background_planes.h"
+
 namespace psfs {
 
 struct BackgroundModelParams {
@@ -50,19 +52,6 @@ struct BackgroundModelParams {
   // there (the recording's empty part was shorter than learning_frames, or its first sets were
   // missed) and the frame is reconstructed; before that, it is skipped.
   int min_learning_frames = 10;
-};
-
-// Read-only view of the planes the classifier needs, row-major, width*height floats each.
-struct BackgroundPlanes {
-  const float* mean_r = nullptr;
-  const float* mean_g = nullptr;
-  const float* mean_intensity = nullptr;
-  // 1 / (sigma * sqrt(2)): (dr * scale_r)^2 + (dg * scale_g)^2 is half the squared
-  // Mahalanobis distance, and scale_r * scale_g / pi is the density's normaliser
-  // 1 / (2 pi sigma_r sigma_g), so no log/sqrt is needed per pixel at classification time.
-  const float* scale_r = nullptr;
-  const float* scale_g = nullptr;
-  const float* var_intensity = nullptr;  // variance of I (8-bit levels squared)
 };
 
 class BackgroundModel {
@@ -101,6 +90,12 @@ class BackgroundModel {
 
   // --- parameters ---------------------------------------------------------------------------
   BackgroundPlanes planes() const;
+  // Writable planes of a ready model, for the selective update done elsewhere: the GPU pixel
+  // stage copies its device planes back here (GpuPixelStage::downloadBackgrounds), and its
+  // host emulation updates through them. The writer keeps every variance at or above the
+  // floors and the scales at 1 / sqrt(2 var) (pixel_arithmetic.h, backgroundScale). Throws
+  // std::logic_error while the model is learning (the planes are not final yet).
+  MutableBackgroundPlanes mutablePlanes();
   // CV_32FC1 copies of the parameter planes (for tests, visualisation, tools).
   cv::Mat meanR() const { return plane(mean_r_); }
   cv::Mat meanG() const { return plane(mean_g_); }

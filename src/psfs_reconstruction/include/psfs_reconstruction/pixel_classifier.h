@@ -24,6 +24,8 @@
 // evaluated directly rather than through a colour table: with K = 2 that costs two vector
 // exps per pixel, and it is exact, whereas the thesis' 256x256 rg table is off by up to 52/255
 // on the steep flank of the skin cluster (3 % of all colours by more than 5/255).
+// The per-pixel arithmetic of those loops is written once (src/pixel_arithmetic.h) and shared
+// with the GPU pixel stage (gpu_pixel_stage.h), which therefore gives the same bytes.
 #pragma once
 
 #include <cstdint>
@@ -34,6 +36,7 @@
 
 #include "psfs_reconstruction/background_model.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
+#include "psfs_reconstruction/skin_kernel_term.h"
 
 namespace psfs {
 
@@ -111,15 +114,6 @@ struct ClassificationStats {
   double darkFraction() const { return pixels ? double(dark_pixels) / pixels : 0.0; }
   double saturatedFraction() const { return pixels ? double(saturated_pixels) / pixels : 0.0; }
 };
-
-namespace detail {
-// One skin GMM component, pre-multiplied for the row kernel (implementation detail):
-// density = weight * exp(-(a dr^2 + b2 dr dg + c dg^2)), [a, b2/2; b2/2, c] = covariance^-1 / 2,
-// weight = w / (2 pi sqrt(det covariance)).
-struct SkinKernelTerm {
-  float mean_r, mean_g, a, b2, c, weight;
-};
-}  // namespace detail
 
 class PixelClassifier {
  public:
