@@ -8,6 +8,7 @@
 #include "cpu_dispatch.h"
 #include "fusion_common.h"
 #include "psfs_kernels.h"
+#include "volume_fusion.h"
 
 namespace psfs {
 namespace {
@@ -33,6 +34,33 @@ void checkProbability(double p, const char* name, bool allow_zero) {
 }
 
 }  // namespace
+
+namespace detail {
+
+PsfsRowParams psfsRowParams(const PsfsOptions& o, const ProjectionTable& table) {
+  const int C = table.numCameras();
+  PsfsRowParams p;
+  p.nx = table.grid().dims.x();
+  p.nxp = table.paddedRowLength();
+  p.num_cameras = C;
+  p.chunks = table.chunksPerRow();
+  const double td = o.drop_threshold > 0.0 ? o.drop_threshold : o.threshold;
+  p.drop_below = static_cast<int32_t>(std::lround(ViewEvidence::kLogScale * std::log(td)));
+  p.min_views = o.min_views;
+  p.offset = (o.hull_prior > 0.0 && o.view_prior > 0.0)
+                 ? static_cast<float>(std::log(o.hull_prior) / C - std::log(o.view_prior))
+                 : 0.0f;
+  p.log_t = static_cast<float>(std::log(o.threshold));
+  p.exp_table_size = kExpTableSize;
+  p.exp_scale = kExpScale;
+  p.t_byte = thresholdByte(o.threshold);
+  p.zero_outside = o.zero_outside_hull;
+  return p;
+}
+
+const int32_t* psfsExpTable() { return expTable().data(); }
+
+}  // namespace detail
 
 double foregroundViewPrior(double hull_occupancy_foreground, int num_cameras) {
   checkProbability(hull_occupancy_foreground, "hull_occupancy_foreground", false);
@@ -68,27 +96,10 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
   if (!out) throw std::invalid_argument("psfs::PsfsFusion::fuse: null output");
   detail::checkInputs(table, evidence, options_.multi_projection, "psfs::PsfsFusion::fuse");
   detail::checkFootprint(table, evidence, options_.footprint, "psfs::PsfsFusion::fuse");
-  const int C = table.numCameras();
   std::vector<detail::KernelView> views = detail::kernelViews(evidence);
-
-  detail::PsfsRowParams p;
-  p.nx = table.grid().dims.x();
-  p.nxp = table.paddedRowLength();
-  p.num_cameras = C;
-  p.chunks = table.chunksPerRow();
+  detail::PsfsRowParams p = detail::psfsRowParams(options_, table);
   p.views = views.data();
-  const double td = options_.drop_threshold > 0.0 ? options_.drop_threshold : options_.threshold;
-  p.drop_below = static_cast<int32_t>(std::lround(ViewEvidence::kLogScale * std::log(td)));
-  p.min_views = options_.min_views;
-  p.offset = (options_.hull_prior > 0.0 && options_.view_prior > 0.0)
-                 ? static_cast<float>(std::log(options_.hull_prior) / C - std::log(options_.view_prior))
-                 : 0.0f;
-  p.log_t = static_cast<float>(std::log(options_.threshold));
-  p.exp_table = expTable().data();
-  p.exp_table_size = kExpTableSize;
-  p.exp_scale = kExpScale;
-  p.t_byte = thresholdByte(options_.threshold);
-  p.zero_outside = options_.zero_outside_hull;
+  p.exp_table = detail::psfsExpTable();
   out->grid = table.grid();
   out->data.resize(table.grid().numVoxels());
   uint8_t* dst = out->data.data();

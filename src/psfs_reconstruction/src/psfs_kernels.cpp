@@ -19,53 +19,20 @@ namespace psfs {
 namespace detail {
 namespace {
 
-constexpr int kPad16 = ViewEvidence::kQuadPad * PackedUV::kOne - PackedUV::kOne / 2;  // 16P - 8
 // Memory bound, not only accuracy: a sample at the largest offset from the not-observed marker
 // (u = 0) or from the image border must stay inside the pair image's replicated border.
 static_assert(ProjectionTable::kMaxSampleOffsetPx * PackedUV::kOne <= kPad16,
               "sample offsets must stay within the pair images' border");
+static_assert(kVoxLogScale == ViewEvidence::kLogScale && kVoxNoEvidence == ViewEvidence::kNoEvidence &&
+                  kVoxQuadPad == ViewEvidence::kQuadPad && kVoxOne == PackedUV::kOne &&
+                  kVoxChunk == ProjectionTable::kChunk,
+              "voxel_arithmetic.h's constants must be the layout's");
 constexpr int32_t kNoEv = ViewEvidence::kNoEvidence;
+// The log series' coefficients as an array for the vector kernels' loops.
+constexpr float kLnP[7] = {kLnP0, kLnP1, kLnP2, kLnP3, kLnP4, kLnP5, kLnP6};
 
 // ---------------------------------------------------------------------------- scalar -------
-
-inline int pixelOf(uint32_t uv, int width) { return PackedUV::pixelIndex(uv, width); }
-
-// Bilinear sample at padded fixed-point position (su, sv) (1/16 px, origin at pixel -kQuadPad):
-// the same integer arithmetic as maddubs + madd in the AVX2 kernel. Result in [0, 255 * 256].
-inline int32_t bilinear(const KernelView& v, int32_t su, int32_t sv) {
-  const int32_t u0 = su >> 4, fu = su & 15, v0 = sv >> 4, fv = sv & 15;
-  const uint16_t* q = v.pairs + v0 * v.quad_stride + u0;
-  const int32_t a = q[0] & 255, c = q[0] >> 8, b = q[1] & 255, d = q[1] >> 8;
-  const int32_t left = a * (16 - fv) + c * fv;
-  const int32_t right = b * (16 - fv) + d * fv;
-  return left * (16 - fu) + right * fu;  // = top (16 - fv) + bottom fv, the same integer
-}
-
-inline void cswap(int32_t& a, int32_t& b) {
-  const int32_t lo = std::min(a, b), hi = std::max(a, b);
-  a = lo;
-  b = hi;
-}
-
-// Sum of the two middle values of 6 (optimal 12-comparator sorting network, pruned by the
-// compiler to what positions 2 and 3 need).
-inline int32_t middlePair6(int32_t s[6]) {
-  cswap(s[0], s[5]), cswap(s[1], s[3]), cswap(s[2], s[4]);
-  cswap(s[1], s[2]), cswap(s[3], s[4]);
-  cswap(s[0], s[3]), cswap(s[2], s[5]);
-  cswap(s[0], s[1]), cswap(s[2], s[3]), cswap(s[4], s[5]);
-  cswap(s[1], s[2]), cswap(s[3], s[4]);
-  return s[2] + s[3];
-}
-
-// Bilinear sample at voxel centre `uv` (packed) +- the packed offset `off` (sign +1 or -1).
-inline int32_t faceSample(const KernelView& v, uint32_t uv, uint32_t off, int sign) {
-  const int32_t uf = static_cast<int32_t>(uv & 0xFFFFu) + kPad16;
-  const int32_t vf = static_cast<int32_t>(uv >> 16) + kPad16;
-  const int32_t du = static_cast<int16_t>(off & 0xFFFFu);
-  const int32_t dv = static_cast<int32_t>(off) >> 16;
-  return bilinear(v, uf + sign * du, vf + sign * dv);
-}
+// The reference kernels: the per-voxel arithmetic of voxel_arithmetic.h (the GPU's too).
 
 // One camera's walk over one row (psfs_kernels.h): the median pair of every voxel x < nxp
 // (scratch for unobserved ones) and the row's +y / +z faces into yf / zf.
@@ -77,13 +44,15 @@ void facePairsScalar(const KernelView& v, int nxp, const uint32_t* cen, const ui
     const uint32_t uv = cen[x];
     const bool obs = uv != v.not_observed;
     const uint32_t* o = off + (x / ProjectionTable::kChunk) * 3;
+    // The sharing rule (sharedFace) with the lower voxels' + faces carried: a carried face is
+    // there exactly when the lower voxel is observed.
     int32_t s[6];
-    s[1] = faceSample(v, uv, o[0], 1);
-    s[3] = faceSample(v, uv, o[1], 1);
-    s[5] = faceSample(v, uv, o[2], 1);
-    s[0] = carry >= 0 ? carry : faceSample(v, uv, o[0], -1);
-    s[2] = yf[x] != kNoFace ? yf[x] : faceSample(v, uv, o[1], -1);
-    s[4] = zf[x] != kNoFace ? zf[x] : faceSample(v, uv, o[2], -1);
+    s[1] = plusFace(v, uv, o[0]);
+    s[3] = plusFace(v, uv, o[1]);
+    s[5] = plusFace(v, uv, o[2]);
+    s[0] = carry >= 0 ? carry : minusFace(v, uv, o[0]);
+    s[2] = yf[x] != kNoFace ? yf[x] : minusFace(v, uv, o[1]);
+    s[4] = zf[x] != kNoFace ? zf[x] : minusFace(v, uv, o[2]);
     carry = obs ? s[1] : -1;
     yf[x] = obs ? static_cast<uint16_t>(s[3]) : kNoFace;
     zf[x] = obs ? static_cast<uint16_t>(s[5]) : kNoFace;
@@ -91,71 +60,14 @@ void facePairsScalar(const KernelView& v, int nxp, const uint32_t* cen, const ui
   }
 }
 
-// Log term of a median pair m (likelihood m / 130560), floored at half a byte step like
-// ViewEvidence::logTerm: round(1024 ln(max(m, 256) / 130560)). Computed, not looked up (a
-// gather costs more than these dozen operations): m = 2^e f, f in [1, 2), t = f - 1,
-// ln f = t P(t) with P the degree-6 least-squares fit of ln(1 + t) / t on Chebyshev nodes
-// (|error| < 3e-7 in float, 3e-4 of a fixed-point step; no division, unlike the atanh series).
-// Same float operations (with FMA) as logTermAvx2 and logTerm512, so all give the same bytes.
-constexpr float kLn2 = 0.693147180559945f;
-constexpr float kLnFullPair = 11.779591f;  // ln(2 * 255 * 256) = ln 130560
-constexpr float kLnP[7] = {0.999978516f, -0.499423297f, 0.327937181f, -0.225006931f,
-                           0.133351158f, -0.0541751417f, 0.0104858724f};
-inline int32_t logTermOfPair(int32_t m) {
-  const float x = static_cast<float>(std::max(m, 256));
-  uint32_t bits;
-  std::memcpy(&bits, &x, 4);
-  const float e = static_cast<float>(static_cast<int32_t>(bits >> 23) - 127);
-  const uint32_t fb = (bits & 0x007FFFFFu) | 0x3F800000u;
-  float f;
-  std::memcpy(&f, &fb, 4);
-  const float t = f - 1.0f;
-  float p = kLnP[6];
-  for (int k = 5; k >= 0; --k) p = std::fma(p, t, kLnP[k]);
-  const float lnx = std::fma(e, kLn2, p * t);
-  return static_cast<int32_t>(std::nearbyint((lnx - kLnFullPair) * static_cast<float>(ViewEvidence::kLogScale)));
-}
-
-inline uint8_t finalise(const PsfsRowParams& p, int32_t sum, int32_t n, const int32_t* m, int k) {
-  for (int j = 0; j < k; ++j)
-    if (m[j] < p.drop_below) {
-      sum -= m[j];
-      n -= 1;
-    }
-  if (n < p.min_views) return 0;
-  float mean = static_cast<float>(sum) * (1.0f / ViewEvidence::kLogScale);
-  mean = mean / static_cast<float>(n);
-  mean = mean + p.offset;
-  const bool in = mean > p.log_t;
-  float e = -mean * p.exp_scale;
-  e = std::min(e, static_cast<float>(p.exp_table_size - 1));
-  e = std::max(e, 0.0f);
-  const int32_t b = p.exp_table[static_cast<int32_t>(e)];
-  if (in) return static_cast<uint8_t>(std::max(b, p.t_byte + 1));
-  return p.zero_outside ? 0 : static_cast<uint8_t>(std::min(b, p.t_byte));
-}
-
 // One voxel from its per-camera terms term(c) (> 0: no evidence), as the vector kernels fuse
 // them: sum, count of observing views, the K lowest terms.
 template <int K, class TermFn>
 uint8_t fuseTermsScalar(const PsfsRowParams& p, const TermFn& term) {
-  int32_t sum = 0, inactive = 0;
-  int32_t m[K > 0 ? K : 1];
-  for (int j = 0; j < K; ++j) m[j] = kNoEv;
-  for (int c = 0; c < p.num_cameras; ++c) {
-    int32_t t = term(c);
-    inactive += t > 0;
-    sum += std::min(t, 0);
-    for (int j = 0; j < K; ++j) {
-      const int32_t lo = std::min(m[j], t);
-      t = std::max(m[j], t);
-      m[j] = lo;
-    }
-  }
-  return finalise(p, sum, p.num_cameras - inactive, m, K);
+  TermFusion<K> f;
+  for (int c = 0; c < p.num_cameras; ++c) f.add(term(c));
+  return f.finish(p);
 }
-
-inline int32_t centreTerm(const KernelView& v, uint32_t uv) { return v.terms[pixelOf(uv, v.width)]; }
 
 template <int K>
 void rowScalar(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
@@ -171,8 +83,7 @@ void faceRowScalar(const PsfsRowParams& p, const uint32_t* centres, const uint32
   medianPairsOfRow(p.views, p.num_cameras, p.nxp, centres, offsets, yface, zface, pairs.data());
   for (int x = 0; x < p.nx; ++x)
     out[x] = fuseTermsScalar<K>(p, [&](int c) {
-      return centreTerm(p.views[c], centres[c * p.nxp + x]) > 0 ? kNoEv
-                                                                : logTermOfPair(pairs[size_t(c) * p.nxp + x]);
+      return faceTerm(centreTerm(p.views[c], centres[c * p.nxp + x]), pairs[size_t(c) * p.nxp + x]);
     });
 }
 
@@ -641,7 +552,7 @@ void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uin
     for (int x = 0; x < nxp; ++x) {
       const uint32_t uv = centres[c * nxp + x];
       const uint32_t off = offsets[(c * chunks + x / ProjectionTable::kChunk) * 3 + axis];
-      faces[c * nxp + x] = uv == views[c].not_observed ? kNoFace : static_cast<uint16_t>(faceSample(views[c], uv, off, 1));
+      faces[c * nxp + x] = uv == views[c].not_observed ? kNoFace : static_cast<uint16_t>(plusFace(views[c], uv, off));
     }
 }
 

@@ -8,36 +8,19 @@
 //    multiply-adds (maddubs + madd) and, on AVX-512, masked gathers; Highway 1.0 (Debian 12)
 //    has neither, so a port needs the lerp in 32-bit arithmetic (three times the instructions
 //    by count; not yet ported or measured).
+// The plain C++ reference kernels are made of the per-voxel functions of voxel_arithmetic.h,
+// which the CUDA kernels (gpu_psfs_fusion.h) run too: one source for the arithmetic.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "voxel_arithmetic.h"
+
 namespace psfs {
 namespace detail {
 
-struct KernelView {
-  const int16_t* terms;    // ViewEvidence::terms
-  const uint16_t* pairs;   // ViewEvidence::pairs (multi-projection only)
-  int width;
-  int quad_stride;
-  bool has_mask;           // some pixel switched off (else only unobserved voxels lack evidence)
-  uint32_t not_observed;   // PackedUV::notObserved(height)
-};
-
-struct PsfsRowParams {
-  int nx = 0, nxp = 0, num_cameras = 0, chunks = 0;
-  const KernelView* views = nullptr;
-  int32_t drop_below = 0;        // fixed-point log term: observations below are droppable
-  int min_views = 1;
-  float offset = 0.0f;           // per observing view: ln(P(H)^(1/C) / P(G1[c]))
-  float log_t = 0.0f;            // ln t
-  const int32_t* exp_table = nullptr;  // byte of exp(-(i + 0.5) / exp_scale)
-  int exp_table_size = 0;
-  float exp_scale = 0.0f;
-  int32_t t_byte = 0;
-  bool zero_outside = false;
-};
+// KernelView and PsfsRowParams: voxel_arithmetic.h (shared with the GPU).
 
 // Single projection. centres: ProjectionTable::rowCentres.
 using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, uint8_t* out);
@@ -74,10 +57,9 @@ constexpr int kMaxOccludedViews = 4;
 //  * yface[c * nxp + x]: +y faces of the previous row of this layer (in), this row's (out);
 //  * zface[c * nxp + x]: +z faces of this row in the previous layer (in), this layer's (out).
 // Both buffers must be readable 16 entries past num_cameras * nxp (whole-vector loads).
-// kNoFace in a buffer (the value of a face whose lower voxel is missing or unobserved) makes
-// the kernel sample the face from the upper voxel.
-constexpr uint16_t kNoFace = 0xFFFF;
-static_assert(255 * 256 < kNoFace, "a face sample must never read as the kNoFace marker");
+// kNoFace (voxel_arithmetic.h) in a buffer (the value of a face whose lower voxel is missing or
+// unobserved) makes the kernel sample the face from the upper voxel. voxelMedianPair
+// (voxel_arithmetic.h) is the same rule for one voxel without a walk (the GPU's threads).
 using PsfsFaceRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres,
                                const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
                                uint8_t* out);

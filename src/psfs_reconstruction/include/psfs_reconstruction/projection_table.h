@@ -5,6 +5,8 @@
 // from small per-camera images. Grids that move every frame (hand sub-volumes) or that are too
 // big to store (256x256x192 x 8 cameras would be 400 MB) are projected on the fly, one x-row at
 // a time into a per-thread buffer, by the same float code, so both storages give the same bytes.
+// That code (src/voxel_projection.h) also projects on-the-fly tables on a GPU
+// (gpu_psfs_fusion.h), from the plain constants projectionCamera() / projectionGrid().
 //
 // Per voxel and camera the table holds the voxel centre's image position, packed (see PackedUV).
 // For the multi-projection test it also holds, per camera and per chunk of 8 voxels along x
@@ -30,6 +32,7 @@
 #include <utility>
 #include <vector>
 
+#include "psfs_reconstruction/projection_constants.h"
 #include "psfs_reconstruction/voxel_grid.h"
 #include "tabletop_capture/camera_model.h"
 
@@ -132,7 +135,7 @@ class ProjectionTable {
   // Level of a packed centre of camera c in a footprint table (0 in a plain one). The packed v of
   // level l is offset by l * (height + 1) rows: evidence level l starts at row l * (height + 1).
   int footprintLevelOf(int c, uint32_t packed) const {
-    return static_cast<int>(packed >> (16 + PackedUV::kFracBits)) / (cameras_[c].height + 1);
+    return static_cast<int>(packed >> (16 + PackedUV::kFracBits)) / (cameras_[c].proj.height + 1);
   }
   size_t memoryBytes() const;  // stored projections (0 when on the fly)
   // What a precomputed table of this grid and these options would take.
@@ -160,20 +163,19 @@ class ProjectionTable {
   // A packed centre of camera c as rowCentres gives it, without its footprint level.
   uint32_t withoutLevel(int c, uint32_t packed) const {
     const uint32_t level = static_cast<uint32_t>(footprintLevelOf(c, packed));
-    return packed - ((level * static_cast<uint32_t>(PackedUV::kOne * (cameras_[c].height + 1))) << 16);
+    return packed - ((level * static_cast<uint32_t>(PackedUV::kOne * (cameras_[c].proj.height + 1))) << 16);
   }
+
+  // ---- The projection as plain data (projection_constants.h) -----------------------------
+  // What the table projects with: a GPU (gpu_psfs_fusion.h) projects an on-the-fly table on
+  // the device from these with the table build's own code, to the same packed values.
+  const ProjectionCamera& projectionCamera(int c) const { return cameras_[c].proj; }
+  ProjectionGrid projectionGrid() const;
 
  private:
   struct Camera {
     tabletop_capture::CameraModel model;
-    Eigen::Matrix3d camera_R_world;
-    Eigen::Vector3d position;  // camera centre in world
-    float fx, fy, cx, cy;
-    float k1, k2, p1, p2, k3;
-    bool distorted;
-    float r2_max;          // valid range of the lens model (squared normalised radius)
-    int width, height;
-    double focal;          // sqrt(fx fy), for the footprint levels
+    ProjectionCamera proj;
   };
   void build();
   void checkFootprintRows(const std::vector<Camera>& cams) const;

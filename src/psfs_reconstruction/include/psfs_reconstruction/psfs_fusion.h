@@ -39,7 +39,8 @@
 // Parallel over grid rows (OpenMP; with multi-projection over slabs of z layers, each walked by
 // one thread carrying the shared faces: a grid only a few layers deep gets fewer threads),
 // 16 voxels per AVX-512 step or 8 per AVX2 step, scalar fallback with identical results.
-// Costs on the reference rig: bench/bench_fusion.cpp.
+// Costs on the reference rig: bench/bench_fusion.cpp. The same bytes on a CUDA device:
+// GpuPsfsFusion (gpu_psfs_fusion.h; bench/bench_gpu_fusion.cpp).
 //
 // Use (e.g. a nodelet): tables once, evidence and fusion per frame.
 //   ProjectionTableOptions mp;  mp.multi_projection = true;
