@@ -41,6 +41,15 @@ Papf::Papf(const BodyProfile& profile, const PapfParams& params)
   profile_.validate();
   params_.validate();
   beta_.fill(1.0);
+  if (params_.gpu_weights) {
+    gpu_ = std::make_unique<GpuParticleWeights>();
+    if (!gpu_->usable()) dropGpu(gpu_->reason());
+  }
+}
+
+void Papf::dropGpu(const std::string& why) {
+  gpu_warning_ = "gpu_weights: " + why + "; the particle weights run on the CPU";  // `why` may be gpu_'s
+  gpu_.reset();
 }
 
 void Papf::reset() {
@@ -67,6 +76,14 @@ double Papf::scoreState(const BodyState& s, int partition) const {
 }
 
 void Papf::scoreAll(int partition) {
+  if (gpu_) {
+    try {
+      gpu_->score(profile_, particles_, partition, params_.threads, &scores_);
+      return;
+    } catch (const std::runtime_error& e) {
+      dropGpu(e.what());
+    }
+  }
   const int n = static_cast<int>(particles_.size());
   scores_.resize(n);
 #pragma omp parallel for num_threads(std::max(1, params_.threads)) schedule(dynamic, 8)
@@ -367,6 +384,13 @@ const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
   const auto t0 = std::chrono::steady_clock::now();
   times_ = PapfTimes();
   observation_.setVolumes(body, skin);
+  if (gpu_) {
+    try {
+      gpu_->setObservation(observation_);
+    } catch (const std::runtime_error& e) {
+      dropGpu(e.what());
+    }
+  }
   const bool person = observation_.occupiedVoxels() >= params_.min_person_voxels;
   collectSkinTargets(estimate_.tracking ? &estimate_.frames.head_centre : nullptr);
   estimate_.started = false;

@@ -54,12 +54,14 @@ struct PartSetup {
   double base[4], q_base[4], q_dy[4], q_dz[4];
 };
 
-// One row's contribution: `w` to the weight sum, then terms[0..count) to the weighted
-// likelihood sum in that order; count < 0: the row misses the part.
+// One row's contribution: `w` to the weight sum, then to the weighted likelihood sum, in this
+// order, those of its terms present in `mask` (bit k: terms[k]): the grid's voxels (or the
+// unknown value for the whole row), the lattice left of the grid, right of it. mask < 0: the
+// row misses the part. Fixed slots, no running index: the GPU keeps them in registers.
 struct RowTerms {
   double w;
   double terms[3];
-  int count;
+  int mask;
 };
 
 struct PartSums {
@@ -142,7 +144,7 @@ BT_HD double rowWeights(double A, double B, double C, long lo, long hi) {
 BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g,
                         const RowSumsView& sums, int yy, int z) {
   RowTerms t;
-  t.count = -1;
+  t.mask = -1;
   const double h = g.voxel_size;
   const double C = s.C;
   double v0[4], qv[4];
@@ -168,11 +170,12 @@ BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const Observat
   const long a = static_cast<long>(xlo), b = static_cast<long>(xhi);
   const double w_all = rowWeights(A, B, C, a, b);
   t.w = w_all;
-  t.count = 0;
+  t.mask = 0;
   const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const bool row_in_grid = yy >= 0 && yy < ny && z >= 0 && z < nz;
   if (!row_in_grid && !q.extrapolate) {
-    t.terms[t.count++] = g.unknown * w_all;
+    t.terms[0] = g.unknown * w_all;
+    t.mask = 1;
     return t;
   }
   // The row's values: its own inside the grid, else the nearest row's (clamp to edge), and
@@ -180,16 +183,22 @@ BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const Observat
   const int cy = iclamp(yy, 0, ny - 1), cz = iclamp(z, 0, nz - 1);
   const long r = static_cast<long>(cy + ny * cz) * (nx + 1);
   const long ga = lmax(a, 0), gb = lmin(b, nx - 1);
-  if (ga <= gb)
-    t.terms[t.count++] = (1.0 + A) * (sums.s0[r + gb + 1] - sums.s0[r + ga]) +
-                         B * (sums.s1[r + gb + 1] - sums.s1[r + ga]) +
-                         C * (sums.s2[r + gb + 1] - sums.s2[r + ga]);
-  if (a < 0)
-    t.terms[t.count++] = rowWeights(A, B, C, a, lmin(b, -1)) *
-                         (q.extrapolate ? sums.s0[r + 1] - sums.s0[r] : g.unknown);
-  if (b >= nx)
-    t.terms[t.count++] = rowWeights(A, B, C, lmax(a, nx), b) *
-                         (q.extrapolate ? sums.s0[r + nx] - sums.s0[r + nx - 1] : g.unknown);
+  if (ga <= gb) {
+    t.terms[0] = (1.0 + A) * (sums.s0[r + gb + 1] - sums.s0[r + ga]) +
+                 B * (sums.s1[r + gb + 1] - sums.s1[r + ga]) +
+                 C * (sums.s2[r + gb + 1] - sums.s2[r + ga]);
+    t.mask |= 1;
+  }
+  if (a < 0) {
+    t.terms[1] = rowWeights(A, B, C, a, lmin(b, -1)) *
+                 (q.extrapolate ? sums.s0[r + 1] - sums.s0[r] : g.unknown);
+    t.mask |= 2;
+  }
+  if (b >= nx) {
+    t.terms[2] = rowWeights(A, B, C, lmax(a, nx), b) *
+                 (q.extrapolate ? sums.s0[r + nx] - sums.s0[r + nx - 1] : g.unknown);
+    t.mask |= 4;
+  }
   return t;
 }
 
@@ -205,9 +214,11 @@ BT_HD RowTerms rowTermsAt(const PartSetup& s, const PartQuadric& q, const Observ
 }
 
 BT_HD void accumulateRow(const RowTerms& t, PartSums* acc) {
-  if (t.count < 0) return;
+  if (t.mask < 0) return;
   acc->sw += t.w;
-  for (int i = 0; i < t.count; ++i) acc->swy += t.terms[i];
+  if (t.mask & 1) acc->swy += t.terms[0];
+  if (t.mask & 2) acc->swy += t.terms[1];
+  if (t.mask & 4) acc->swy += t.terms[2];
 }
 
 // A part thinner than the lattice may catch no voxel centre: its evidence is unknown.
