@@ -187,8 +187,8 @@ TEST(GpuParticleWeights, NoDeviceAllocationPerFrame) {
     w.setObservation(obs);
     for (int partition = 0; partition < Papf::kPartitions; ++partition) {
       std::vector<double> gpu, emulated;
-      w.score(sc.papf->profile(), sc.wide, partition, 2, &gpu);
-      emulateGpuParticleWeights(obs, sc.papf->profile(), sc.wide, partition, 2, &emulated);
+      w.score(sc.papf->profile(), sc.tracked, partition, 2, &gpu);
+      emulateGpuParticleWeights(obs, sc.papf->profile(), sc.tracked, partition, 2, &emulated);
       EXPECT_EQ(gpu, emulated) << "frame " << k << ", partition " << partition;
     }
     if (k == 0) after_first = w.deviceAllocations();
