@@ -1,5 +1,5 @@
 // PAPF timings (DESIGN.md section 6: "PAPF 256 particles x 4 layers <= 10 ms" on 2 cores; the
-// thesis: 25.8 ms on a GTX 280). Input: 40 consecutive frames of the simulated rig's
+// thesis: 25.8 ms on a GTX 280). Input (sim_frames.h): 40 consecutive frames of the simulated rig's
 // reach_targets script in short sleeves, rendered and reconstructed by psfs::Reconstructor
 // (64x64x48 body and skin volumes), prepared once (~3 s). A tracker is warmed up on them, then
 // each iteration is one full update (downsampling, three partitions x L layers, hands) on the
@@ -12,47 +12,10 @@
 #include "body_tracking/papf.h"
 #include "body_tracking/silhouette_mask.h"
 #include "hand_tracking/mpf_tracker.h"
-#include "psfs_reconstruction/gaussian_mixture.h"
-#include "psfs_reconstruction/reconstructor.h"
-#include "tabletop_sim/simulated_rig.h"
+#include "sim_frames.h"
 
 namespace body_tracking {
 namespace {
-
-namespace sim = tabletop_sim;
-
-struct Frames {
-  std::vector<psfs::ProbabilityVolume> skin, body;
-  std::vector<tabletop_capture::CameraModel> cameras;
-  Frames() {
-    constexpr int kLearn = 25, kFrames = 40, kSkip = 60;  // start mid-reach
-    sim::SimOptions o;
-    o.script = "reach_targets";
-    o.short_sleeves = true;
-    o.empty_frames = kLearn;
-    sim::SimulatedRig rig(o);
-    cameras = rig.rig().cameras;
-    psfs::ReconstructorParams rp;
-    psfs::Reconstructor rec(psfs::GaussianMixture2D::load(BODY_TRACKING_SKIN_MODEL), rp);
-    for (int f = 0; f < kLearn; ++f) rec.process(rig.render(f).images, rig.rig().cameras);
-    for (int f = kLearn + kSkip; f < kLearn + kSkip + kFrames; ++f) {
-      psfs::FrameResult r = rec.process(rig.render(f).images, rig.rig().cameras);
-      skin.push_back(std::move(r.skin));
-      body.push_back(std::move(r.body));
-    }
-  }
-  // Back and forth: 0, 1, ..., n-1, n-2, ..., 1, 0, 1, ...
-  size_t at(size_t i) const {
-    const size_t n = body.size(), p = 2 * (n - 1);
-    const size_t k = i % p;
-    return k < n ? k : p - k;
-  }
-};
-
-const Frames& frames() {
-  static const Frames f;
-  return f;
-}
 
 // Arguments: particles, layers, observation downsample (2: 32x32x24, 1: 64x64x48), threads.
 void BM_PapfUpdate(benchmark::State& st) {

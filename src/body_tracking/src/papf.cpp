@@ -8,8 +8,9 @@
 #include <Eigen/Cholesky>
 
 #include "body_tracking/arm_ik.h"
-#include "body_tracking/part_collision.h"
 #include "body_tracking/state_tangent.h"
+#include "part_score.h"
+#include "scored_parts.h"
 
 namespace body_tracking {
 
@@ -40,6 +41,15 @@ Papf::Papf(const BodyProfile& profile, const PapfParams& params)
   profile_.validate();
   params_.validate();
   beta_.fill(1.0);
+  if (params_.gpu_weights) {
+    gpu_ = std::make_unique<GpuParticleWeights>();
+    if (!gpu_->usable()) dropGpu(gpu_->reason());
+  }
+}
+
+void Papf::dropGpu(const std::string& why) {
+  gpu_warning_ = "gpu_weights: " + why + "; the particle weights run on the CPU";  // `why` may be gpu_'s
+  gpu_.reset();
 }
 
 void Papf::reset() {
@@ -51,43 +61,29 @@ void Papf::reset() {
   beta_.fill(1.0);
 }
 
-namespace {
-
-// The partitions: their first state index, size, and the parts that score them.
-struct PartitionSpec {
-  int first, count;
-  std::array<Part, 3> parts;
-};
-const PartitionSpec kPartitionSpecs[Papf::kPartitions] = {
-    {dof::TORSO_X, 8, {Part::ABDOMEN, Part::CHEST, Part::HEAD}},
-    {dof::L_SWING_1, 5, {Part::LEFT_UPPER_ARM, Part::LEFT_FOREARM, Part::LEFT_HAND}},
-    {dof::R_SWING_1, 5, {Part::RIGHT_UPPER_ARM, Part::RIGHT_FOREARM, Part::RIGHT_HAND}}};
-
-}  // namespace
+static_assert(Papf::kPartitions == kPapfPartitions, "scored_parts.h lists the partitions");
 
 double Papf::scoreState(const BodyState& s, int partition) const {
-  const BodyFrames f = forwardKinematics(profile_, s);
-  if (partition < 0) {
-    const BodyParts parts = buildParts(profile_, f);
-    return bodyCollides(profile_, f, parts) ? 0.0 : observation_.score(parts);
-  }
-  // Only the parts this partition scores, and for an arm the trunk and head its collision test
-  // needs (part_collision.h): the trunk chain cannot collide with itself; an arm's pose is
-  // checked against the trunk and the other arm as they stand.
   BodyParts parts;
-  for (Part p : kPartitionSpecs[partition].parts) parts[static_cast<int>(p)] = buildPart(profile_, f, p);
-  if (partition > 0) {
-    for (Part p : {Part::ABDOMEN, Part::CHEST, Part::HEAD})
-      parts[static_cast<int>(p)] = buildPart(profile_, f, p);
-    if (bodyCollides(profile_, f, parts)) return 0.0;
-  }
-  double sum = 0;
-  for (Part p : kPartitionSpecs[partition].parts)
-    sum += observation_.partScore(parts[static_cast<int>(p)], isSkinPart(p), isTrunkPart(p));
-  return sum;
+  const bool collides = buildScoredParts(profile_, s, partition, &parts);
+  Part scored[kNumParts];
+  const int n = scoredParts(partition, scored);
+  double part_scores[kNumParts];
+  for (int k = 0; k < n && !collides; ++k)
+    part_scores[k] = observation_.partScore(parts[static_cast<int>(scored[k])], isSkinPart(scored[k]),
+                                            isTrunkPart(scored[k]));
+  return part_score::particleScore(part_scores, n, collides);
 }
 
 void Papf::scoreAll(int partition) {
+  if (gpu_) {
+    try {
+      gpu_->score(profile_, particles_, partition, params_.threads, &scores_);
+      return;
+    } catch (const std::runtime_error& e) {
+      dropGpu(e.what());
+    }
+  }
   const int n = static_cast<int>(particles_.size());
   scores_.resize(n);
 #pragma omp parallel for num_threads(std::max(1, params_.threads)) schedule(dynamic, 8)
@@ -388,6 +384,13 @@ const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
   const auto t0 = std::chrono::steady_clock::now();
   times_ = PapfTimes();
   observation_.setVolumes(body, skin);
+  if (gpu_) {
+    try {
+      gpu_->setObservation(observation_);
+    } catch (const std::runtime_error& e) {
+      dropGpu(e.what());
+    }
+  }
   const bool person = observation_.occupiedVoxels() >= params_.min_person_voxels;
   collectSkinTargets(estimate_.tracking ? &estimate_.frames.head_centre : nullptr);
   estimate_.started = false;

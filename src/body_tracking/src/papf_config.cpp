@@ -35,7 +35,8 @@ void addPapfKeys(PapfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("lost_score", &p.lost_score)
       .add("lost_frames", &p.lost_frames)
       .add("seed", &p.seed)
-      .add("threads", &p.threads);
+      .add("threads", &p.threads)
+      .add("gpu_weights", &p.gpu_weights);
   s->add("world_frame", &c->nodelet.world_frame)
       .add("tf_prefix", &c->nodelet.tf_prefix)
       .add("body_profile_file", &c->nodelet.body_profile_file)

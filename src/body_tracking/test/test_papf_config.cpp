@@ -54,6 +54,7 @@ TEST(PapfConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.params.lost_frames, d.lost_frames);
   EXPECT_EQ(c.params.seed, d.seed);
   EXPECT_EQ(c.params.threads, d.threads);
+  EXPECT_EQ(c.params.gpu_weights, d.gpu_weights);
   EXPECT_EQ(c.nodelet.world_frame, n.world_frame);
   EXPECT_EQ(c.nodelet.tf_prefix, n.tf_prefix);
   EXPECT_EQ(c.nodelet.body_profile_file, n.body_profile_file);

@@ -18,10 +18,13 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "body_tracking/body_parts.h"
+#include "body_tracking/gpu_particle_weights.h"
 #include "body_tracking/hand_refinement.h"
 #include "body_tracking/joint_limits.h"
 #include "body_tracking/papf_params.h"
@@ -69,6 +72,10 @@ class Papf {
   const std::vector<double>& weights() const { return weights_; }
   const PapfTimes& lastTimes() const { return times_; }
   const VolumeObservation& observation() const { return observation_; }
+  // Whether the particle weights run on the GPU (params().gpu_weights and a usable device), and
+  // why not where they were asked for ("" otherwise): for the caller to log once.
+  bool gpuWeightsActive() const { return gpu_ != nullptr; }
+  const std::string& gpuWarning() const { return gpu_warning_; }
 
   // The scoring of one state as the filter sees it (0 for a self-colliding pose): all parts
   // (partition < 0), or one partition's (0 trunk, 1 left arm, 2 right arm).
@@ -79,6 +86,7 @@ class Papf {
   bool initialise();  // false: no person in the volume
   void anneal(bool from_previous);
   void scoreAll(int partition);
+  void dropGpu(const std::string& why);  // back to the CPU for good, saying why
   void resampleUniform();
   double solveBeta(double previous);
   void layerWeights(double beta);
@@ -105,6 +113,8 @@ class Papf {
   BodyEstimate estimate_;
   int bad_frames_ = 0;
   PapfTimes times_;
+  std::unique_ptr<GpuParticleWeights> gpu_;
+  std::string gpu_warning_;
 };
 
 }  // namespace body_tracking

@@ -44,6 +44,10 @@ struct PapfParams {
   int lost_frames = 8;          // consecutive bad frames (or frames without a person) -> lost
   uint64_t seed = 1;
   int threads = 2;
+  // Particle weights on the GPU (gpu_particle_weights.h) where one is usable: the same scores,
+  // so the same estimates; without a usable device the CPU scores and Papf::gpuWarning() says
+  // why.
+  bool gpu_weights = false;
 
   // Throws std::invalid_argument naming the parameter.
   void validate() const;

@@ -51,13 +51,17 @@ class VolumeObservation {
   const std::vector<float>& bodyLikelihood() const { return body_; }
   const std::vector<float>& skinLikelihood() const { return skin_; }
 
- private:
   // Per row (fixed y, z) prefix sums of y, x y and x^2 y (x = voxel index): the part's voxels
   // in a row form one interval, and its weight 1 + v^T Q v is quadratic in x, so a row's
   // weighted sum is three lookups. Each particle then costs O(rows), not O(voxels).
   struct RowSums {
-    std::vector<double> s0, s1, s2;  // (dims.x + 1) entries per row
+    std::vector<double> s0, s1, s2;  // (dims.x + 1) entries per row, row y + dims.y * z
   };
+  // The sums the parts read: the blended likelihood's for the skin parts, else the body's (what
+  // the GPU particle weights upload each frame).
+  const RowSums& rowSums(bool skin_part) const { return skin_part ? blended_sums_ : body_sums_; }
+
+ private:
   static void buildRowSums(const psfs::VoxelGrid& g, const std::vector<float>& y, RowSums* out);
 
   ObservationParams params_;

@@ -1,0 +1,248 @@
+// Private: the arithmetic of the PAPF observation's per-part score (volume_observation.h), once,
+// for the CPU path and the GPU particle weights (issue 20, thesis figure 6.4). Plain structs and
+// pointers only, so g++ and nvcc compile the same functions:
+//   setupPart    the part's row-invariant quantities (its voxel rows, Q at the grid's base);
+//   rowTerms     one voxel row's weight and likelihood terms (GPU: one thread per row);
+//   accumulateRow  adds a row's terms to the part's sums, rows in order (GPU: one thread per
+//                part walks its rows' terms in order, so the sums round exactly as on the CPU);
+//   finishPart   the part's weighted mean; particleScore the particle's sum over its parts.
+// The expressions keep the operation order of the Eigen code they replaced (Vector4d::dot in
+// SSE2 pairs, Matrix4d * Vector4d column by column), so the scores are the same bytes as before.
+// Build with no FMA contraction on either side (--fmad=false, -ffp-contract=off).
+#pragma once
+
+#include <math.h>
+
+#include "host_device.h"
+
+namespace body_tracking {
+namespace part_score {
+
+// The observation grid at the working resolution, and the likelihood read outside it.
+struct ObservationGrid {
+  double origin[3];
+  double voxel_size;
+  int dims[3];
+  double unknown;
+};
+
+// Per-row prefix sums of y, x y and x^2 y (VolumeObservation::RowSums): dims[0] + 1 entries per
+// row, row index y + dims[1] * z.
+struct RowSumsView {
+  const double* s0;
+  const double* s1;
+  const double* s2;
+};
+
+// A TruncatedQuadric as the score reads it.
+struct PartQuadric {
+  double Q[16];         // column-major (Eigen's layout): Q(i, k) = Q[4 k + i]
+  double planes[2][4];  // inside where planes[i] . v >= 0
+  double lo[3], hi[3];  // axis-aligned bounds (world)
+  int num_planes;
+  int skin;             // reads the blended (skin-weighted) likelihood
+  int extrapolate;      // trunk: rows outside the grid read the nearest grid row
+  int pad_;
+};
+
+// The part's row-invariant quantities: its lattice (x range, rows y0..y1 x z0..z1) and, along a
+// row, v(x) = v0 + x h e_x with v^T Q v = A + B x + C x^2.
+struct PartSetup {
+  double bx0, bx1;
+  int y0, y1, z0, z1;
+  double C;
+  double base[4], q_base[4], q_dy[4], q_dz[4];
+};
+
+// One row's contribution: `w` to the weight sum, then to the weighted likelihood sum, in this
+// order, those of its terms present in `mask` (bit k: terms[k]): the grid's voxels (or the
+// unknown value for the whole row), the lattice left of the grid, right of it. mask < 0: the
+// row misses the part. Fixed slots, no running index: the GPU keeps them in registers.
+struct RowTerms {
+  double w;
+  double terms[3];
+  int mask;
+};
+
+struct PartSums {
+  double sw, swy;
+};
+
+BT_HD double dmax(double a, double b) { return a < b ? b : a; }  // std::max's NaN behaviour
+BT_HD double dmin(double a, double b) { return b < a ? b : a; }
+BT_HD long lmax(long a, long b) { return a < b ? b : a; }
+BT_HD long lmin(long a, long b) { return b < a ? b : a; }
+BT_HD int iclamp(int v, int lo, int hi) { return v < lo ? lo : (hi < v ? hi : v); }
+
+// Eigen's Vector4d::dot with SSE2 or AVX packets: lanes (0, 2) and (1, 3), then the two sums.
+BT_HD double dot4(const double* a, const double* b) {
+  return (a[0] * b[0] + a[2] * b[2]) + (a[1] * b[1] + a[3] * b[3]);
+}
+
+// Eigen's Matrix4d * Vector4d (column-major, lazy product): column by column.
+BT_HD void matVec4(const double* Q, const double* v, double* out) {
+  for (int i = 0; i < 4; ++i)
+    out[i] = ((Q[i] * v[0] + Q[4 + i] * v[1]) + Q[8 + i] * v[2]) + Q[12 + i] * v[3];
+}
+
+// Sums of 1, x and x^2 over the integers lo..hi (lo <= hi).
+BT_HD double sumPow0(long lo, long hi) { return static_cast<double>(hi - lo + 1); }
+BT_HD double sumPow1(long lo, long hi) {
+  return 0.5 * (static_cast<double>(hi) * (hi + 1) - static_cast<double>(lo - 1) * lo);
+}
+BT_HD double sumPow2Upto(double n) { return n * (n + 1) * (2 * n + 1) / 6.0; }  // sum 0..n of x^2
+BT_HD double sumPow2(long lo, long hi) {
+  // Valid for negative bounds too: sum_{lo..hi} x^2 = F(hi) - F(lo - 1) with F(n) for n < 0
+  // defined by the same cubic (it is odd-symmetric about -1/2).
+  return sumPow2Upto(static_cast<double>(hi)) - sumPow2Upto(static_cast<double>(lo - 1));
+}
+
+// Tightens [lo, hi] to the integers x with a + b x >= 0.
+BT_HD void clipLinear(double a, double b, double* lo, double* hi) {
+  if (fabs(b) < 1e-15) {
+    if (a < 0) *hi = *lo - 1;
+    return;
+  }
+  const double r = -a / b;
+  if (b > 0) *lo = dmax(*lo, ceil(r - 1e-9));
+  else *hi = dmin(*hi, floor(r + 1e-9));
+}
+
+BT_HD PartSetup setupPart(const PartQuadric& q, const ObservationGrid& g) {
+  PartSetup s;
+  const double h = g.voxel_size;
+  // The voxel lattice over the part's bounds, extended past the grid where the part is.
+  const double lo_x = (q.lo[0] - g.origin[0]) / h, hi_x = (q.hi[0] - g.origin[0]) / h;
+  const double lo_y = (q.lo[1] - g.origin[1]) / h, hi_y = (q.hi[1] - g.origin[1]) / h;
+  const double lo_z = (q.lo[2] - g.origin[2]) / h, hi_z = (q.hi[2] - g.origin[2]) / h;
+  s.bx0 = floor(lo_x);
+  s.bx1 = floor(hi_x);
+  s.y0 = static_cast<int>(floor(lo_y));
+  s.y1 = static_cast<int>(floor(hi_y));
+  s.z0 = static_cast<int>(floor(lo_z));
+  s.z1 = static_cast<int>(floor(hi_z));
+  s.C = h * h * q.Q[0];
+  // Q v0 is affine in the row's (y, z): one 4x4 product per part, then additions.
+  s.base[0] = g.origin[0] + 0.5 * h;
+  s.base[1] = g.origin[1] + 0.5 * h;
+  s.base[2] = g.origin[2] + 0.5 * h;
+  s.base[3] = 1.0;
+  matVec4(q.Q, s.base, s.q_base);
+  for (int i = 0; i < 4; ++i) {
+    s.q_dy[i] = h * q.Q[4 + i];
+    s.q_dz[i] = h * q.Q[8 + i];
+  }
+  return s;
+}
+
+// Weight sum over x = lo..hi of 1 + A + B x + C x^2.
+BT_HD double rowWeights(double A, double B, double C, long lo, long hi) {
+  return (1.0 + A) * sumPow0(lo, hi) + B * sumPow1(lo, hi) + C * sumPow2(lo, hi);
+}
+
+// Row (yy, z) of the part's lattice.
+BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g,
+                        const RowSumsView& sums, int yy, int z) {
+  RowTerms t;
+  t.mask = -1;
+  const double h = g.voxel_size;
+  const double C = s.C;
+  double v0[4], qv[4];
+  v0[0] = s.base[0] + 0.0;
+  v0[1] = s.base[1] + yy * h;
+  v0[2] = s.base[2] + z * h;
+  v0[3] = s.base[3] + 0.0;
+  for (int i = 0; i < 4; ++i) qv[i] = s.q_base[i] + yy * s.q_dy[i] + z * s.q_dz[i];
+  const double A = dot4(v0, qv), B = 2.0 * h * qv[0];
+  double xlo = s.bx0, xhi = s.bx1;
+  if (C > 1e-15) {
+    const double disc = B * B - 4.0 * A * C;
+    if (disc < 0) return t;
+    const double sq = sqrt(disc);
+    xlo = dmax(xlo, ceil((-B - sq) / (2.0 * C) - 1e-9));
+    xhi = dmin(xhi, floor((-B + sq) / (2.0 * C) + 1e-9));
+  } else {
+    clipLinear(-A, -B, &xlo, &xhi);  // A + B x <= 0
+  }
+  for (int i = 0; i < q.num_planes; ++i)
+    clipLinear(dot4(q.planes[i], v0), q.planes[i][0] * h, &xlo, &xhi);
+  if (xlo > xhi) return t;
+  const long a = static_cast<long>(xlo), b = static_cast<long>(xhi);
+  const double w_all = rowWeights(A, B, C, a, b);
+  t.w = w_all;
+  t.mask = 0;
+  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const bool row_in_grid = yy >= 0 && yy < ny && z >= 0 && z < nz;
+  if (!row_in_grid && !q.extrapolate) {
+    t.terms[0] = g.unknown * w_all;
+    t.mask = 1;
+    return t;
+  }
+  // The row's values: its own inside the grid, else the nearest row's (clamp to edge), and
+  // beyond its ends the end values (trunk) or the unknown value (the rest).
+  const int cy = iclamp(yy, 0, ny - 1), cz = iclamp(z, 0, nz - 1);
+  const long r = static_cast<long>(cy + ny * cz) * (nx + 1);
+  const long ga = lmax(a, 0), gb = lmin(b, nx - 1);
+  if (ga <= gb) {
+    t.terms[0] = (1.0 + A) * (sums.s0[r + gb + 1] - sums.s0[r + ga]) +
+                 B * (sums.s1[r + gb + 1] - sums.s1[r + ga]) +
+                 C * (sums.s2[r + gb + 1] - sums.s2[r + ga]);
+    t.mask |= 1;
+  }
+  if (a < 0) {
+    t.terms[1] = rowWeights(A, B, C, a, lmin(b, -1)) *
+                 (q.extrapolate ? sums.s0[r + 1] - sums.s0[r] : g.unknown);
+    t.mask |= 2;
+  }
+  if (b >= nx) {
+    t.terms[2] = rowWeights(A, B, C, lmax(a, nx), b) *
+                 (q.extrapolate ? sums.s0[r + nx] - sums.s0[r + nx - 1] : g.unknown);
+    t.mask |= 4;
+  }
+  return t;
+}
+
+// Rows of the part's lattice; row k is (y0 + k % ny, z0 + k / ny), z outer as on the CPU.
+BT_HD int rowCount(const PartSetup& s) {
+  const int ny = s.y1 - s.y0 + 1, nz = s.z1 - s.z0 + 1;
+  return ny > 0 && nz > 0 ? ny * nz : 0;
+}
+BT_HD RowTerms rowTermsAt(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g,
+                          const RowSumsView& sums, int k) {
+  const int ny = s.y1 - s.y0 + 1;
+  return rowTerms(s, q, g, sums, s.y0 + k % ny, s.z0 + k / ny);
+}
+
+BT_HD void accumulateRow(const RowTerms& t, PartSums* acc) {
+  if (t.mask < 0) return;
+  acc->sw += t.w;
+  if (t.mask & 1) acc->swy += t.terms[0];
+  if (t.mask & 2) acc->swy += t.terms[1];
+  if (t.mask & 4) acc->swy += t.terms[2];
+}
+
+// A part thinner than the lattice may catch no voxel centre: its evidence is unknown.
+BT_HD double finishPart(const PartSums& acc, double unknown) {
+  return acc.sw > 1e-12 ? acc.swy / acc.sw : unknown;
+}
+
+// The whole part on one thread: the CPU path (VolumeObservation::partScore).
+BT_HD double scorePart(const PartQuadric& q, const ObservationGrid& g, const RowSumsView& sums) {
+  const PartSetup s = setupPart(q, g);
+  PartSums acc = {0.0, 0.0};
+  for (int z = s.z0; z <= s.z1; ++z)
+    for (int yy = s.y0; yy <= s.y1; ++yy) accumulateRow(rowTerms(s, q, g, sums, yy, z), &acc);
+  return finishPart(acc, g.unknown);
+}
+
+// A particle's score: its parts' scores summed in order, 0 for a self-colliding pose
+// (Papf::scoreState).
+BT_HD double particleScore(const double* part_scores, int count, bool collides) {
+  if (collides) return 0.0;
+  double sum = 0;
+  for (int k = 0; k < count; ++k) sum += part_scores[k];
+  return sum;
+}
+
+}  // namespace part_score
+}  // namespace body_tracking

@@ -1,0 +1,30 @@
+// Private: which parts score which PAPF partition, and a particle's parts built for scoring, as
+// Papf::scoreState and the GPU particle weights (gpu_particle_weights.h) both need them.
+#pragma once
+
+#include <array>
+
+#include "body_tracking/body_parts.h"
+
+namespace body_tracking {
+
+constexpr int kPapfPartitions = 3;
+
+// A partition: its first state index, its size, and the parts that score it.
+struct PartitionSpec {
+  int first, count;
+  std::array<Part, 3> parts;
+};
+extern const PartitionSpec kPartitionSpecs[kPapfPartitions];
+
+// The parts whose scores sum to a particle's score for `partition` (< 0: all nine, in Part
+// order): their number, written to out[0..n).
+int scoredParts(int partition, Part out[kNumParts]);
+
+// Builds the parts of state `s` that scoring `partition` reads (and for an arm partition, or
+// all parts, those its self-collision test needs) into *parts. Returns true when the pose
+// self-collides (part_collision.h), which scores 0: an arm's pose is checked against the trunk
+// and the other arm as they stand; the trunk chain cannot collide with itself.
+bool buildScoredParts(const BodyProfile& profile, const BodyState& s, int partition, BodyParts* parts);
+
+}  // namespace body_tracking
