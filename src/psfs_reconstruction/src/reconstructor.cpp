@@ -11,6 +11,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "gpu_frame_path.h"
 #include "psfs_reconstruction/cuda_device.h"
 #include "psfs_reconstruction/image_checks.h"
 #include "tabletop_capture/rig_description.h"
@@ -77,11 +78,30 @@ Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const Reconstr
   (void)probe;
   if (params.backend == ReconstructorParams::Backend::kCuda) {
     const cuda::DeviceInfo& d = cuda::device();
-    if (d.usable)
-      active_backend_ = ReconstructorParams::Backend::kCuda;
-    else
+    if (!d.usable) {
       backend_warning_ = "backend cuda: " + d.describe() + "; running on the CPU";
+    } else {
+      try {
+        gpu_ = std::make_unique<GpuFramePath>(skin_model, params);
+        active_backend_ = ReconstructorParams::Backend::kCuda;
+      } catch (const std::runtime_error& e) {
+        backend_warning_ = std::string("backend cuda: ") + e.what() + "; running on the CPU";
+      }
+    }
   }
+}
+
+void Reconstructor::dropGpu(const std::string& what, std::vector<std::string>* warnings) {
+  std::string models = "";
+  try {
+    gpu_->syncModels(&backgrounds_);
+  } catch (const std::exception& e) {
+    models = " (the background updates since the models were uploaded are lost: " +
+             std::string(e.what()) + ")";
+  }
+  gpu_.reset();
+  active_backend_ = ReconstructorParams::Backend::kCpu;
+  warnings->push_back("backend cuda failed: " + what + "; running on the CPU from now on" + models);
 }
 
 Reconstructor::~Reconstructor() = default;
@@ -95,6 +115,7 @@ void Reconstructor::setFusionThresholds(double body, double skin, double hand) {
   body_fusion_ = fb;
   skin_fusion_ = fs;
   hand_fusion_ = fh;
+  if (gpu_) gpu_->setFusion(b, s, h);
   params_.body = b;
   params_.skin = s;
   params_.hand = h;
@@ -108,6 +129,15 @@ bool Reconstructor::backgroundReady() const {
 }
 
 void Reconstructor::resetBackground() {
+  if (gpu_) {
+    try {
+      gpu_->syncModels(&backgrounds_);
+    } catch (const std::runtime_error& e) {
+      std::vector<std::string> ignored;  // the next frame set finds the GPU path gone
+      dropGpu(e.what(), &ignored);
+    }
+    if (gpu_) gpu_->modelsChanged();
+  }
   if (backgroundReady()) previous_backgrounds_ = backgrounds_;
   for (auto& b : backgrounds_) b = BackgroundModel(b.width(), b.height(), params_.background);
   learning_skips_ = 0;
@@ -174,6 +204,10 @@ void Reconstructor::adoptRig(const std::vector<tabletop_capture::CameraModel>& c
     classifier_.setPriors(ClassPriors::fromOccupancy(params_.hull_occupancy_foreground,
                                                      params_.hull_occupancy_skin,
                                                      static_cast<int>(cameras.size())));
+    if (gpu_) {
+      gpu_->setPriors(classifier_.priors());
+      gpu_->modelsChanged();
+    }
     likelihoods_.assign(cameras.size(), cv::Mat());
   }
   if (calibration_changed) {
@@ -263,14 +297,16 @@ Reconstructor::LearningVerdict Reconstructor::skipLearningFrame(const std::strin
 // camera_active, body, skin (with_skin), their times and warnings.
 void Reconstructor::fuseWorkspace(const std::vector<cv::Mat>& rgb,
                                   const std::vector<BackgroundModel>& backgrounds, FrameResult* r,
-                                  bool with_skin) {
+                                  bool with_skin, bool gpu) {
   const int n = static_cast<int>(cameras_.size());
   std::vector<int> seen;
   for (int i = 0; i < n; ++i)
     if (!rgb[i].empty()) seen.push_back(i);
   // --- classification
   auto t0 = Clock::now();
-  {
+  if (gpu) {
+    r->stats = gpu_->classify(rgb, backgrounds, &likelihoods_);
+  } else {
     std::vector<cv::Mat> seen_rgb, seen_likelihoods;
     std::vector<const BackgroundModel*> bg;
     for (int i : seen) {
@@ -316,20 +352,30 @@ void Reconstructor::fuseWorkspace(const std::vector<cv::Mat>& rgb,
       skin_views[i].active = off;
     }
   }
-  body_evidence_.set(body_views, params_.body.multi_projection, params_.threads,
-                     params_.body.footprint ? params_.body_footprint : FootprintFilter());
-  if (with_skin)
-    skin_evidence_.set(skin_views, params_.skin.multi_projection, params_.threads,
-                       params_.skin.footprint ? params_.skin_footprint : FootprintFilter());
+  if (gpu) {
+    gpu_->buildEvidence(r->camera_active, likelihoods_, with_skin);
+  } else {
+    body_evidence_.set(body_views, params_.body.multi_projection, params_.threads,
+                       params_.body.footprint ? params_.body_footprint : FootprintFilter());
+    if (with_skin)
+      skin_evidence_.set(skin_views, params_.skin.multi_projection, params_.threads,
+                         params_.skin.footprint ? params_.skin_footprint : FootprintFilter());
+  }
   r->times.evidence = msSince(t0);
 
   // --- workspace volumes
   t0 = Clock::now();
-  body_fusion_.fuse(*table_, body_evidence_, &r->body);
+  if (gpu)
+    gpu_->fuseBody(*table_, &r->body);
+  else
+    body_fusion_.fuse(*table_, body_evidence_, &r->body);
   r->times.body = msSince(t0);
   if (!with_skin) return;
   t0 = Clock::now();
-  skin_fusion_.fuse(*table_, skin_evidence_, &r->skin);
+  if (gpu)
+    gpu_->fuseSkin(*table_, &r->skin);
+  else
+    skin_fusion_.fuse(*table_, skin_evidence_, &r->skin);
   r->times.skin = msSince(t0);
 }
 
@@ -386,6 +432,7 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
       return r;
     }
     for (auto& b : backgrounds_) b.finishLearning();  // and reconstruct this set below
+    if (gpu_) gpu_->modelsChanged();
   }
   r.status = FrameResult::Status::kReconstructed;
   r.background_frames = backgrounds_[0].learnedFrames();
@@ -393,7 +440,30 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
   // the next resetBackground() keeps the ones in use then.
   previous_backgrounds_.clear();
 
-  fuseWorkspace(rgb, backgrounds_, &r);
+  if (gpu_) {
+    const size_t warnings_before = r.warnings.size();
+    try {
+      reconstruct(rgb, hand_rois, foreground_masks, true, &r);
+    } catch (const std::runtime_error& e) {
+      r.warnings.resize(warnings_before);  // the CPU run below says them again
+      dropGpu(e.what(), &r.warnings);
+      reconstruct(rgb, hand_rois, foreground_masks, false, &r);
+    }
+  } else {
+    reconstruct(rgb, hand_rois, foreground_masks, false, &r);
+  }
+  r.backend = active_backend_;
+  r.times.total = msSince(t_start);
+  return r;
+}
+
+void Reconstructor::reconstruct(const std::vector<cv::Mat>& rgb,
+                                const std::vector<Eigen::Vector3d>& hand_rois,
+                                const std::vector<cv::Mat>& foreground_masks, bool gpu,
+                                FrameResult* out) {
+  FrameResult& r = *out;
+  const int n = static_cast<int>(cameras_.size());
+  fuseWorkspace(rgb, backgrounds_, &r, /*with_skin=*/true, gpu);
 
   // --- hand sub-volumes (grids move with the hands: projected on the fly)
   auto t0 = Clock::now();
@@ -410,7 +480,10 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
     } else {
       hand_tables_[h]->update(grid, cameras_);
     }
-    hand_fusion_.fuse(*hand_tables_[h], skin_evidence_, &r.hands[h]);
+    if (gpu)
+      gpu_->fuseHand(*hand_tables_[h], &r.hands[h]);
+    else
+      hand_fusion_.fuse(*hand_tables_[h], skin_evidence_, &r.hands[h]);
   }
   r.times.hands = msSince(t0);
 
@@ -424,12 +497,11 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
           foreground_masks[i].type() == CV_8UC1 && foreground_masks[i].size() == rgb[i].size())
         cv::bitwise_or(masks[i], foreground_masks[i], masks[i]);
       // A switched-off camera shows no scene: learning from it would poison the model.
-      if (r.camera_active[i]) backgrounds_[i].update(rgb[i], masks[i], params_.threads);
+      if (!gpu && r.camera_active[i]) backgrounds_[i].update(rgb[i], masks[i], params_.threads);
     }
+    if (gpu) gpu_->updateBackground(masks, r.camera_active);
   }
   r.times.background = msSince(t0);
-  r.times.total = msSince(t_start);
-  return r;
 }
 
 std::vector<cv::Mat> Reconstructor::backProject(const ProbabilityVolume& volume,
@@ -477,8 +549,10 @@ std::vector<cv::Mat> Reconstructor::backProject(const ProbabilityVolume& volume,
 void Reconstructor::saveBackground(const std::string& directory) const {
   if (!backgroundReady())
     throw std::runtime_error("background model is not learned yet: nothing to save");
-  for (size_t i = 0; i < backgrounds_.size(); ++i)
-    backgrounds_[i].save(directory + "/" + cameras_[i].name + ".bgm");
+  std::vector<BackgroundModel> models = backgrounds_;
+  if (gpu_) gpu_->copyModels(&models);  // the device's updates since the upload
+  for (size_t i = 0; i < models.size(); ++i)
+    models[i].save(directory + "/" + cameras_[i].name + ".bgm");
 }
 
 void Reconstructor::loadBackground(const std::string& directory,

@@ -90,6 +90,8 @@ class PapfNodelet : public nodelet::Nodelet {
           : cfg_.nodelet.body_profile_file;
       profile_ = BodyProfile::fromYamlFile(profile_file);
       papf_ = std::make_unique<Papf>(profile_, cfg_.params);
+      if (papf_->gpuWeightsActive()) NODELET_INFO("papf: particle weights on the GPU");
+      reportGpuWarning();
     } catch (const std::exception& e) {
       fatal_ = e.what();
       NODELET_FATAL("papf: not started: bad parameters: %s", e.what());
@@ -187,6 +189,7 @@ class PapfNodelet : public nodelet::Nodelet {
     }
     try {
       papf_->update(body_, skin_msg ? &skin_ : nullptr);
+      reportGpuWarning();  // a CUDA failure moves the weights to the CPU
     } catch (const std::exception& e) {
       ++rejected_;
       NODELET_ERROR_THROTTLE(5.0, "papf: %s", e.what());
@@ -375,6 +378,14 @@ class PapfNodelet : public nodelet::Nodelet {
   PapfConfig cfg_;
   BodyProfile profile_;
   std::unique_ptr<Papf> papf_;
+  // gpu_weights without a usable GPU (or after a CUDA failure): said once per reason.
+  void reportGpuWarning() {
+    const std::string& w = papf_->gpuWarning();
+    if (w.empty() || w == reported_gpu_warning_) return;
+    NODELET_WARN("papf: %s", w.c_str());
+    reported_gpu_warning_ = w;
+  }
+  std::string reported_gpu_warning_;
   std::string fatal_;
   ros::Subscriber body_sub_, skin_sub_, frames_sub_;
   ros::Publisher pose_pub_, joints_pub_, targets_pub_, markers_pub_;

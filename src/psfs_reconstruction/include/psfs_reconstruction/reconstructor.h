@@ -142,6 +142,8 @@ struct FrameResult {
   ReconstructorParams::Backend backend = ReconstructorParams::Backend::kCpu;
 };
 
+class GpuFramePath;  // private (src/gpu_frame_path.h)
+
 class Reconstructor {
  public:
   // Throws std::invalid_argument for an empty skin model or invalid parameters.
@@ -204,8 +206,15 @@ class Reconstructor {
                                      std::vector<std::string>* warnings);
   LearningVerdict skipLearningFrame(const std::string& why, std::vector<std::string>* warnings);
   // with_skin false: the body volume only (r->skin left empty), for the relearn check.
+  // gpu: on the GPU path (backgrounds must be backgrounds_).
   void fuseWorkspace(const std::vector<cv::Mat>& rgb, const std::vector<BackgroundModel>& backgrounds,
-                     FrameResult* r, bool with_skin = true);
+                     FrameResult* r, bool with_skin = true, bool gpu = false);
+  // Volumes, hand sub-volumes and the background update of a set whose models are ready.
+  void reconstruct(const std::vector<cv::Mat>& rgb, const std::vector<Eigen::Vector3d>& hand_rois,
+                   const std::vector<cv::Mat>& foreground_masks, bool gpu, FrameResult* r);
+  // After a GPU failure: the CPU from now on, with the device's newest models if it still
+  // gives them, reported in `warnings`.
+  void dropGpu(const std::string& what, std::vector<std::string>* warnings);
   double occupiedLitresAgainstPrevious(const std::vector<cv::Mat>& rgb);
 
   ReconstructorParams params_;
@@ -225,6 +234,7 @@ class Reconstructor {
   ViewEvidence body_evidence_, skin_evidence_;
   int learning_skips_ = 0;  // changed learning sets in a row
   ReconstructorParams::Backend active_backend_ = ReconstructorParams::Backend::kCpu;
+  std::unique_ptr<GpuFramePath> gpu_;  // the GPU path while active_backend_ is kCuda
   std::string backend_warning_;  // a fallback to report with the next frame set
 };
 
