@@ -69,6 +69,12 @@ if [ "$MODE" = bundle ]; then
     while read -r lib; do cp -L "$lib" "$BUNDLE/lib/"; done
   echo "$ROOT" > "$BUNDLE/source_root"
   du -sh "$BUNDLE"
+  # The device tool carries at most 64 MiB. OpenCV's imgcodecs and videoio (linked by the
+  # capture and simulator cores) bring GDAL and FFmpeg: ~280 MB, ~96 MB compressed.
+  if [ "$(du -sm "$BUNDLE" | cut -f1)" -gt 60 ]; then
+    echo "[gpu_check] WARNING: the bundle is over the device tool's 64 MiB carry limit: copy it to" \
+         "the GPU machine another way, or run the plain mode there (ROS, nvcc and a GPU)"
+  fi
   echo "[gpu_check] bundle ready: $BUNDLE (on the GPU machine: bash scripts/gpu_check.sh --from-bundle $BUNDLE)"
   exit 0
 fi
@@ -111,7 +117,9 @@ run_logged() {  # name, command...: output into $OUT/<name>.log, a line into the
   "$@" > "$OUT/$name.log" 2>&1
   local rc=$?
   local summary
-  summary="$(grep -E '^\[  (PASSED|FAILED|SKIPPED) |GPU test skipped|ERROR SUMMARY' "$OUT/$name.log" | sort | uniq -c | head -6 | sed 's/^ *//' | paste -sd ';' -)"
+  summary="$( { grep -E '^\[  (PASSED  |FAILED  |SKIPPED )\] [0-9]+ tests?' "$OUT/$name.log";
+                grep -m1 -o 'GPU test skipped: .*' "$OUT/$name.log";
+                grep -m1 'ERROR SUMMARY' "$OUT/$name.log"; } | paste -sd ';' -)"
   echo "| $name | $rc | $((SECONDS - t0)) s | ${summary} |" >> "$REPORT"
   [ $rc -eq 0 ] || failures=$((failures + 1))
   echo "[gpu_check] $name: exit $rc ($((SECONDS - t0)) s)"
