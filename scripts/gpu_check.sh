@@ -30,6 +30,8 @@ while [ $# -gt 0 ]; do
   esac
 done
 OUT="${OUT:-${ROOT}/gpu_check_$(date -u +%Y%m%d_%H%M%S)}"
+# Absolute: the loader is given the bundle's folders, and ldd reports what it found there.
+[ -n "$BUNDLE" ] && BUNDLE="$(realpath -m "$BUNDLE")"
 
 # The GPU tests and benchmarks by executable; a test executable's gtest filter after ':'.
 GPU_TESTS=(
@@ -54,6 +56,75 @@ build_with_cuda() {
   (cd "$ROOT" && PATH=/usr/bin:$PATH catkin_make -j2 "${targets[@]}" 2>&1 | tail -3) || exit 1
 }
 
+# stub_library REAL WANTED OUT: a library with REAL's soname that defines the symbols of REAL
+# listed in WANTED (functions return at once, objects are zeroed), with REAL's symbol versions.
+stub_library() {
+  local real="$1" wanted="$2" out="$3" soname tmp line size type name base ver v
+  soname="$(readelf -d "$real" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')"
+  tmp="$(mktemp -d)"
+  local -A versions=()
+  : > "$tmp/stub.s"
+  while read -r line; do
+    set -- $line  # value [size] type name[@[@]version]
+    if [ $# -eq 4 ]; then size="$2" type="$3" name="$4"; else size=0 type="$2" name="$3"; fi
+    base="${name%%@*}"; ver=""
+    [[ "$name" == *@* ]] && ver="${name##*@}"
+    grep -qxF "$base" "$wanted" || continue
+    case "$type" in
+      T|t|W|i) printf '.text\n.globl %s\n.type %s,@function\n%s:\n ret\n' "$base" "$base" "$base" ;;
+      *) v=$((16#${size:-0})); [ "$v" -gt 0 ] || v=8
+         printf '.data\n.globl %s\n.type %s,@object\n.size %s,%d\n%s:\n .zero %d\n' "$base" "$base" "$base" "$v" "$base" "$v" ;;
+    esac >> "$tmp/stub.s"
+    [ -n "$ver" ] && versions["$ver"]+="$base; "
+  done < <(nm -D --defined-only -S "$real" 2>/dev/null)
+  local script=()
+  if [ ${#versions[@]} -gt 0 ]; then
+    for v in "${!versions[@]}"; do printf '%s { global: %s };\n' "$v" "${versions[$v]}"; done > "$tmp/vers"
+    script=(-Wl,--version-script="$tmp/vers")
+  fi
+  gcc -shared -nostdlib -o "$out/$soname" -Wl,-soname,"$soname" "${script[@]}" "$tmp/stub.s"
+  rm -rf "$tmp"
+}
+
+# OpenCV's imgcodecs and videoio (the capture and simulator cores link them) bring GDAL, GDCM,
+# FFmpeg and GStreamer, ~280 MB: more than the device tool carries (64 MiB). The GPU tests
+# never call those (the simulator's JPEG artefacts use libjpeg, kept), so they are replaced by
+# stubs that only satisfy the loader (OpenCV is linked with BIND_NOW, so every imported symbol
+# must resolve at load time), and the libraries nothing needs any more are dropped. Checked by
+# loading every executable of the bundle; on any failure the bundle stays untrimmed.
+trim_bundle() {
+  local lib="$BUNDLE/lib" stubs="$BUNDLE/stubs" keep='^lib(opencv_|jpeg|png16|z\.|stdc\+\+|gcc_s|c\.|m\.|ld-linux)'
+  command -v nm >/dev/null && command -v readelf >/dev/null || { echo "[gpu_check] binutils missing: bundle not trimmed"; return; }
+  mkdir -p "$stubs"
+  local wanted; wanted="$(mktemp)"
+  for f in "$lib"/*.so* "$BUNDLE"/bin/*; do nm -D --undefined-only "$f" 2>/dev/null | awk '{print $NF}' | sed 's/@.*//'; done | sort -u > "$wanted"
+  local imp dep
+  for imp in "$lib"/libopencv_imgcodecs.so.* "$lib"/libopencv_videoio.so.*; do
+    [ -f "$imp" ] || continue
+    for dep in $(readelf -d "$imp" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
+      [[ "$dep" =~ $keep ]] && continue
+      [ -f "$stubs/$dep" ] || stub_library "$lib/$dep" "$wanted" "$stubs"
+    done
+  done
+  rm -f "$wanted"
+  # What the executables load now, stubs first.
+  local needed
+  needed="$(for exe in "$BUNDLE"/bin/*; do LD_LIBRARY_PATH="$stubs:$lib" ldd "$exe"; done | awk '/=> \//{print $3}' | sort -u)"
+  local ok=1 exe
+  for exe in "$BUNDLE"/bin/*; do
+    if [[ "$(basename "$exe")" == test_* ]]; then
+      LD_LIBRARY_PATH="$stubs:$lib" "$exe" --gtest_list_tests > /dev/null 2>&1 || { ok=0; echo "[gpu_check] trimmed bundle: $(basename "$exe") does not load"; }
+    fi
+  done
+  if [ $ok -eq 0 ]; then rm -rf "$stubs"; echo "[gpu_check] bundle left untrimmed"; return; fi
+  local f
+  for f in "$lib"/*; do
+    grep -qxF "$f" <<< "$needed" || rm -f "$f"
+  done
+  mv "$stubs"/* "$lib"/ && rmdir "$stubs"
+  echo "[gpu_check] bundle trimmed: $(ls "$lib" | wc -l) libraries ($(grep -c "$stubs" <<< "$needed") stubs)"
+}
+
 if [ "$MODE" = bundle ]; then
   build_with_cuda
   rm -rf "$BUNDLE"; mkdir -p "$BUNDLE/bin" "$BUNDLE/lib"
@@ -68,9 +139,8 @@ if [ "$MODE" = bundle ]; then
   done | sort -u | grep -v -E '/(libc|libm|libdl|libpthread|librt|ld-linux[^/]*|libcuda)\.so' |
     while read -r lib; do cp -L "$lib" "$BUNDLE/lib/"; done
   echo "$ROOT" > "$BUNDLE/source_root"
+  trim_bundle
   du -sh "$BUNDLE"
-  # The device tool carries at most 64 MiB. OpenCV's imgcodecs and videoio (linked by the
-  # capture and simulator cores) bring GDAL and FFmpeg: ~280 MB, ~96 MB compressed.
   if [ "$(du -sm "$BUNDLE" | cut -f1)" -gt 60 ]; then
     echo "[gpu_check] WARNING: the bundle is over the device tool's 64 MiB carry limit: copy it to" \
          "the GPU machine another way, or run the plain mode there (ROS, nvcc and a GPU)"
