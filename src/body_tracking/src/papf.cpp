@@ -147,7 +147,8 @@ void Papf::crossoverAndDiffuse(int partition) {
   const PartitionSpec& ps = kPartitionSpecs[partition];
   const int n = static_cast<int>(particles_.size());
   const int best = static_cast<int>(std::max_element(weights_.begin(), weights_.end()) - weights_.begin());
-  const BodyState mean = weightedMean(particles_.data(), weights_.data(), n, particles_[best], 1);
+  const BodyState mean = weightedMean(particles_.data(), weights_.data(), n, particles_[best], 1,
+                                      std::max(1, params_.threads));
   // Tangent coordinates and children in parallel; every random number is drawn first, in a
   // fixed order, so the result does not depend on the thread count.
   const int threads = std::max(1, params_.threads);
@@ -291,7 +292,8 @@ void Papf::anneal(bool from_previous) {
 void Papf::finishEstimate() {
   const int n = static_cast<int>(particles_.size());
   const int best = static_cast<int>(std::max_element(weights_.begin(), weights_.end()) - weights_.begin());
-  estimate_.state = weightedMean(particles_.data(), weights_.data(), n, particles_[best]);
+  estimate_.state = weightedMean(particles_.data(), weights_.data(), n, particles_[best], 2,
+                                 std::max(1, params_.threads));
   limits_.enforce(&estimate_.state);
   estimate_.frames = forwardKinematics(profile_, estimate_.state);
   const BodyParts parts = buildParts(profile_, estimate_.frames);

@@ -1,6 +1,8 @@
 #include "body_tracking/state_tangent.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -90,14 +92,20 @@ BodyState fromTangent(const BodyState& at, const Tangent& t) {
 }
 
 BodyState weightedMean(const BodyState* states, const double* weights, int n,
-                       const BodyState& start, int iterations) {
+                       const BodyState& start, int iterations, int threads) {
+  // The tangents (quaternion logs, swing-twist) are most of the cost and independent: computed
+  // in parallel, summed in order.
+  std::vector<Tangent> t(std::max(0, n));
   BodyState centre = start;
   for (int it = 0; it < std::max(1, iterations); ++it) {
+#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static)
+    for (int i = 0; i < n; ++i)
+      if (weights[i] > 0) t[i] = toTangent(centre, states[i]);
     Tangent sum = Tangent::Zero();
     double wsum = 0;
     for (int i = 0; i < n; ++i) {
       if (weights[i] <= 0) continue;
-      sum += weights[i] * toTangent(centre, states[i]);
+      sum += weights[i] * t[i];
       wsum += weights[i];
     }
     if (wsum <= 0) return centre;

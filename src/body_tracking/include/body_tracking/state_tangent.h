@@ -23,8 +23,9 @@ Tangent toTangent(const BodyState& at, const BodyState& s);
 BodyState fromTangent(const BodyState& at, const Tangent& t);
 
 // Weighted mean of states (weights >= 0, not all zero), computed in the tangent space at
-// `start` and refined by re-centring `iterations` times.
+// `start` and refined by re-centring `iterations` times. threads: OpenMP threads for the
+// per-state tangents (the sum stays in order, so the result does not depend on it).
 BodyState weightedMean(const BodyState* states, const double* weights, int n,
-                       const BodyState& start, int iterations = 2);
+                       const BodyState& start, int iterations = 2, int threads = 1);
 
 }  // namespace body_tracking
