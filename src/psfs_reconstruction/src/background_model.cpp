@@ -256,31 +256,11 @@ void BackgroundModel::update(const cv::Mat& rgb, const cv::Mat& foreground_mask,
   }
 }
 
-BackgroundPlanes BackgroundModel::planes() const {
-  BackgroundPlanes p;
-  p.mean_r = mean_r_.data();
-  p.mean_g = mean_g_.data();
-  p.mean_intensity = mean_i_.data();
-  p.scale_r = scale_r_.data();
-  p.scale_g = scale_g_.data();
-  p.var_intensity = var_i_.data();
-  p.var_r = var_r_.data();
-  p.var_g = var_g_.data();
-  return p;
-}
+BackgroundPlanes BackgroundModel::planes() const { return planesOf<BackgroundPlanes>(*this); }
 
 MutableBackgroundPlanes BackgroundModel::mutablePlanes() {
   if (!ready_) throw std::logic_error("background model: planes are written only once learned");
-  MutableBackgroundPlanes p;
-  p.mean_r = mean_r_.data();
-  p.mean_g = mean_g_.data();
-  p.mean_intensity = mean_i_.data();
-  p.scale_r = scale_r_.data();
-  p.scale_g = scale_g_.data();
-  p.var_intensity = var_i_.data();
-  p.var_r = var_r_.data();
-  p.var_g = var_g_.data();
-  return p;
+  return planesOf<MutableBackgroundPlanes>(*this);
 }
 
 cv::Mat BackgroundModel::plane(const std::vector<float>& v) const {

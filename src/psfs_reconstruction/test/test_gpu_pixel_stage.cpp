@@ -123,14 +123,10 @@ void expectSameStats(const ClassificationStats& a, const ClassificationStats& b,
 
 // Every plane of two models, bit for bit (the scales included).
 int differingPlaneValues(const BackgroundModel& a, const BackgroundModel& b) {
-  const BackgroundPlanes p = a.planes(), q = b.planes();
-  const float* pa[8] = {p.mean_r, p.mean_g, p.mean_intensity, p.scale_r,
-                        p.scale_g, p.var_intensity, p.var_r, p.var_g};
-  const float* qa[8] = {q.mean_r, q.mean_g, q.mean_intensity, q.scale_r,
-                        q.scale_g, q.var_intensity, q.var_r, q.var_g};
+  const auto pa = planeList(a.planes()), qa = planeList(b.planes());
   const size_t n = size_t(a.width()) * a.height();
   int d = 0;
-  for (int k = 0; k < 8; ++k) d += std::memcmp(pa[k], qa[k], n * sizeof(float)) != 0;
+  for (size_t k = 0; k < pa.size(); ++k) d += std::memcmp(pa[k], qa[k], n * sizeof(float)) != 0;
   return d;
 }
 

@@ -116,6 +116,20 @@ class BackgroundModel {
                               int expected_height = 0);
 
  private:
+  // planes() and mutablePlanes(): the same eight pointers, const or not.
+  template <class Planes, class Model>
+  static Planes planesOf(Model& m) {
+    Planes p;
+    p.mean_r = m.mean_r_.data();
+    p.mean_g = m.mean_g_.data();
+    p.mean_intensity = m.mean_i_.data();
+    p.scale_r = m.scale_r_.data();
+    p.scale_g = m.scale_g_.data();
+    p.var_intensity = m.var_i_.data();
+    p.var_r = m.var_r_.data();
+    p.var_g = m.var_g_.data();
+    return p;
+  }
   cv::Mat plane(const std::vector<float>& v) const;
   void finalizeLearning();
   void refreshScales(std::size_t begin, std::size_t end);

@@ -3,6 +3,8 @@
 // No OpenCV or CUDA types, so the header is usable from g++ and nvcc alike.
 #pragma once
 
+#include <array>
+
 namespace psfs {
 
 // Read-only view of the planes, row-major, width*height floats each.
@@ -32,5 +34,13 @@ struct MutableBackgroundPlanes {
   float* var_r = nullptr;
   float* var_g = nullptr;
 };
+
+// The eight planes in one fixed order (BackgroundPlanes or MutableBackgroundPlanes), for code
+// that treats them alike: copies to and from the GPU, filling a view from the model.
+template <class Planes>
+auto planeList(const Planes& p) {
+  return std::array<decltype(p.mean_r), 8>{p.mean_r,  p.mean_g,        p.mean_intensity, p.scale_r,
+                                           p.scale_g, p.var_intensity, p.var_r,          p.var_g};
+}
 
 }  // namespace psfs

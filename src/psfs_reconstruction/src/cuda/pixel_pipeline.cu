@@ -195,11 +195,9 @@ class CudaPixelPipeline final : public PixelPipelineDevice {
     const Camera& c = cameras_.at(camera);
     const MutableBackgroundPlanes& d = c.buffers.background;
     const std::size_t bytes = std::size_t(c.buffers.width) * c.buffers.height * sizeof(float);
-    const float* src[8] = {host.mean_r,  host.mean_g,        host.mean_intensity, host.scale_r,
-                           host.scale_g, host.var_intensity, host.var_r,          host.var_g};
-    float* dst[8] = {d.mean_r,  d.mean_g,        d.mean_intensity, d.scale_r,
-                     d.scale_g, d.var_intensity, d.var_r,          d.var_g};
-    for (int p = 0; p < 8; ++p)
+    const auto src = planeList(host);
+    const auto dst = planeList(d);
+    for (size_t p = 0; p < src.size(); ++p)
       PSFS_CUDA(cudaMemcpyAsync(dst[p], src[p], bytes, cudaMemcpyHostToDevice, c.stream));
     PSFS_CUDA(cudaStreamSynchronize(c.stream));
   }
@@ -209,11 +207,9 @@ class CudaPixelPipeline final : public PixelPipelineDevice {
     const Camera& c = cameras_.at(camera);
     const MutableBackgroundPlanes& d = c.buffers.background;
     const std::size_t bytes = std::size_t(c.buffers.width) * c.buffers.height * sizeof(float);
-    const float* src[8] = {d.mean_r,  d.mean_g,        d.mean_intensity, d.scale_r,
-                           d.scale_g, d.var_intensity, d.var_r,          d.var_g};
-    float* dst[8] = {host.mean_r,  host.mean_g,        host.mean_intensity, host.scale_r,
-                     host.scale_g, host.var_intensity, host.var_r,          host.var_g};
-    for (int p = 0; p < 8; ++p)
+    const auto src = planeList(d);
+    const auto dst = planeList(host);
+    for (size_t p = 0; p < src.size(); ++p)
       PSFS_CUDA(cudaMemcpyAsync(dst[p], src[p], bytes, cudaMemcpyDeviceToHost, c.stream));
     PSFS_CUDA(cudaStreamSynchronize(c.stream));
   }
