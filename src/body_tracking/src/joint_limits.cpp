@@ -43,14 +43,21 @@ bool BodyLimits::satisfied(const BodyState& s, double tol) const {
   return true;
 }
 
-void BodyLimits::enforce(BodyState* sp) const {
+void BodyLimits::enforce(BodyState* sp) const { enforce(sp, 0, dof::COUNT); }
+
+void BodyLimits::enforce(BodyState* sp, int first, int count) const {
   BodyState& s = *sp;
-  const Quaterniond t = torsoRotation(s[dof::TORSO_ROLL], s[dof::TORSO_PITCH], s[dof::TORSO_YAW]);
-  if (!torso.satisfied(t))
-    torsoAngles(torso.clamp(t), &s[dof::TORSO_ROLL], &s[dof::TORSO_PITCH], &s[dof::TORSO_YAW]);
-  s[dof::SPINE_BEND] = std::clamp(s[dof::SPINE_BEND], min_spine_bend, max_spine_bend);
-  s[dof::HEAD_YAW] = std::clamp(s[dof::HEAD_YAW], -max_head_yaw, max_head_yaw);
+  const int last = first + count;
+  const auto touches = [&](int b, int n) { return b < last && first < b + n; };
+  if (touches(dof::TORSO_ROLL, 3)) {
+    const Quaterniond t = torsoRotation(s[dof::TORSO_ROLL], s[dof::TORSO_PITCH], s[dof::TORSO_YAW]);
+    if (!torso.satisfied(t))
+      torsoAngles(torso.clamp(t), &s[dof::TORSO_ROLL], &s[dof::TORSO_PITCH], &s[dof::TORSO_YAW]);
+  }
+  if (touches(dof::SPINE_BEND, 1)) s[dof::SPINE_BEND] = std::clamp(s[dof::SPINE_BEND], min_spine_bend, max_spine_bend);
+  if (touches(dof::HEAD_YAW, 1)) s[dof::HEAD_YAW] = std::clamp(s[dof::HEAD_YAW], -max_head_yaw, max_head_yaw);
   for (Side side : {Side::LEFT, Side::RIGHT}) {
+    if (!touches(armDof(side, 0), 5)) continue;
     double& s1 = s[armDof(side, 0)];
     double& s2 = s[armDof(side, 1)];
     const Quaterniond q = shoulderRotation(s1, s2);

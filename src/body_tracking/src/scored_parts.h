@@ -11,8 +11,11 @@ namespace body_tracking {
 constexpr int kPapfPartitions = 3;
 
 // A partition: its first state index, its size, and the parts that score it.
+// The most state coordinates one partition holds (the trunk's 8: torso, spine, head).
+constexpr int kMaxPartitionDims = 8;
+
 struct PartitionSpec {
-  int first, count;
+  int first, count;  // state coordinates [first, first + count), count <= kMaxPartitionDims
   std::array<Part, 3> parts;
 };
 extern const PartitionSpec kPartitionSpecs[kPapfPartitions];

@@ -56,37 +56,54 @@ Quaterniond torsoQ(const BodyState& s) {
 
 }  // namespace
 
-Tangent toTangent(const BodyState& at, const BodyState& s) {
-  Tangent t;
-  for (int i = 0; i < 3; ++i) t[i] = s[i] - at[i];
-  t.segment<3>(3) = rotationLog(torsoQ(at).conjugate() * torsoQ(s));
-  t[6] = s[dof::SPINE_BEND] - at[dof::SPINE_BEND];
-  t[7] = std::remainder(s[dof::HEAD_YAW] - at[dof::HEAD_YAW], 2 * M_PI);
+Tangent toTangent(const BodyState& at, const BodyState& s) { return toTangent(at, s, 0, kTangentDim); }
+
+Tangent toTangent(const BodyState& at, const BodyState& s, int first, int count) {
+  const int last = first + count;
+  const auto touches = [&](int b, int n) { return b < last && first < b + n; };
+  Tangent t = Tangent::Zero();
+  for (int i = 0; i < 3; ++i)
+    if (touches(i, 1)) t[i] = s[i] - at[i];
+  if (touches(3, 3)) t.segment<3>(3) = rotationLog(torsoQ(at).conjugate() * torsoQ(s));
+  if (touches(6, 1)) t[6] = s[dof::SPINE_BEND] - at[dof::SPINE_BEND];
+  if (touches(7, 1)) t[7] = std::remainder(s[dof::HEAD_YAW] - at[dof::HEAD_YAW], 2 * M_PI);
   for (Side side : {Side::LEFT, Side::RIGHT}) {
     const int b = armDof(side, 0);
-    t.segment<2>(b) = sphereLog(shoulderDir(at, side), shoulderDir(s, side));
-    t[b + 2] = s[b + 2] - at[b + 2];
-    t.segment<2>(b + 3) = sphereLog(forearmDir(at, side), forearmDir(s, side));
+    if (touches(b, 2)) t.segment<2>(b) = sphereLog(shoulderDir(at, side), shoulderDir(s, side));
+    if (touches(b + 2, 1)) t[b + 2] = s[b + 2] - at[b + 2];
+    if (touches(b + 3, 2)) t.segment<2>(b + 3) = sphereLog(forearmDir(at, side), forearmDir(s, side));
   }
   return t;
 }
 
-BodyState fromTangent(const BodyState& at, const Tangent& t) {
+BodyState fromTangent(const BodyState& at, const Tangent& t) { return fromTangent(at, t, 0, kTangentDim); }
+
+BodyState fromTangent(const BodyState& at, const Tangent& t, int first, int count) {
+  // Block by block (a rotation's coordinates only make sense together): a block the range does
+  // not touch is copied, not sent through its log / exp round trip.
+  const int last = first + count;
+  const auto touches = [&](int b, int n) { return b < last && first < b + n; };
   BodyState s = at;
-  for (int i = 0; i < 3; ++i) s[i] = at[i] + t[i];
-  torsoAngles(torsoQ(at) * rotationExp(t.segment<3>(3)), &s[dof::TORSO_ROLL],
-              &s[dof::TORSO_PITCH], &s[dof::TORSO_YAW]);
-  s[dof::SPINE_BEND] = at[dof::SPINE_BEND] + t[6];
-  s[dof::HEAD_YAW] = std::remainder(at[dof::HEAD_YAW] + t[7], 2 * M_PI);
+  for (int i = 0; i < 3; ++i)
+    if (touches(i, 1)) s[i] = at[i] + t[i];
+  if (touches(3, 3))
+    torsoAngles(torsoQ(at) * rotationExp(t.segment<3>(3)), &s[dof::TORSO_ROLL],
+                &s[dof::TORSO_PITCH], &s[dof::TORSO_YAW]);
+  if (touches(6, 1)) s[dof::SPINE_BEND] = at[dof::SPINE_BEND] + t[6];
+  if (touches(7, 1)) s[dof::HEAD_YAW] = std::remainder(at[dof::HEAD_YAW] + t[7], 2 * M_PI);
   for (Side side : {Side::LEFT, Side::RIGHT}) {
     const int b = armDof(side, 0);
-    const Vector3d d = sphereExp(shoulderDir(at, side), t.segment<2>(b));
-    s[b + 1] = std::asin(std::max(-1.0, std::min(1.0, -d.x())));
-    s[b] = std::atan2(d.z(), d.y());
-    s[b + 2] = at[b + 2] + t[b + 2];
-    const Vector3d e = sphereExp(forearmDir(at, side), t.segment<2>(b + 3));
-    s[b + 3] = std::acos(std::max(-1.0, std::min(1.0, e.y())));
-    if (std::hypot(e.x(), e.z()) > 1e-6) s[b + 4] = std::atan2(e.x(), e.z());
+    if (touches(b, 2)) {
+      const Vector3d d = sphereExp(shoulderDir(at, side), t.segment<2>(b));
+      s[b + 1] = std::asin(std::max(-1.0, std::min(1.0, -d.x())));
+      s[b] = std::atan2(d.z(), d.y());
+    }
+    if (touches(b + 2, 1)) s[b + 2] = at[b + 2] + t[b + 2];
+    if (touches(b + 3, 2)) {
+      const Vector3d e = sphereExp(forearmDir(at, side), t.segment<2>(b + 3));
+      s[b + 3] = std::acos(std::max(-1.0, std::min(1.0, e.y())));
+      if (std::hypot(e.x(), e.z()) > 1e-6) s[b + 4] = std::atan2(e.x(), e.z());
+    }
   }
   return s;
 }

@@ -11,25 +11,35 @@ namespace body_tracking {
 namespace {
 
 // Block mean of a uint8 volume (p = value / 255) over f^3 blocks; partial blocks at the far
-// edges average what they have.
-void downsample(const psfs::ProbabilityVolume& in, int f, psfs::VoxelGrid* grid,
+// edges average what they have. Integer block sums (exact, so the same floats as summing the
+// bytes as floats), output layers in parallel.
+void downsample(const psfs::ProbabilityVolume& in, int f, int threads, psfs::VoxelGrid* grid,
                 std::vector<float>* out) {
   const Eigen::Vector3i& d = in.grid.dims;
   grid->origin = in.grid.origin;
   grid->voxel_size = in.grid.voxel_size * f;
   grid->dims = Eigen::Vector3i((d.x() + f - 1) / f, (d.y() + f - 1) / f, (d.z() + f - 1) / f);
-  out->assign(grid->numVoxels(), 0.0f);
-  std::vector<int> count(grid->numVoxels(), 0);
-  for (int z = 0; z < d.z(); ++z)
-    for (int y = 0; y < d.y(); ++y) {
-      const uint8_t* row = &in.data[in.grid.index(0, y, z)];
-      for (int x = 0; x < d.x(); ++x) {
-        const size_t o = grid->index(x / f, y / f, z / f);
-        (*out)[o] += row[x];
-        ++count[o];
+  out->resize(grid->numVoxels());
+  const int nxo = grid->dims.x(), nyo = grid->dims.y(), nzo = grid->dims.z();
+  const auto extent = [f](int o, int n) { return std::min(n, o * f + f) - o * f; };  // inputs in block o
+#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static)
+  for (int zo = 0; zo < nzo; ++zo) {
+    std::vector<int32_t> sum(size_t(nxo) * nyo, 0);
+    for (int z = zo * f; z < std::min(d.z(), zo * f + f); ++z)
+      for (int y = 0; y < d.y(); ++y) {
+        const uint8_t* row = &in.data[in.grid.index(0, y, z)];
+        int32_t* acc = &sum[size_t(y / f) * nxo];
+        for (int xo = 0, x = 0; xo < nxo; ++xo)
+          for (const int x1 = std::min(d.x(), x + f); x < x1; ++x) acc[xo] += row[x];
       }
-    }
-  for (size_t i = 0; i < out->size(); ++i) (*out)[i] /= 255.0f * std::max(1, count[i]);
+    float* o = out->data() + size_t(nxo) * nyo * zo;
+    const int cz = extent(zo, d.z());
+    for (int yo = 0; yo < nyo; ++yo)
+      for (int xo = 0; xo < nxo; ++xo) {
+        const int count = cz * extent(yo, d.y()) * extent(xo, d.x());
+        o[size_t(yo) * nxo + xo] = static_cast<float>(sum[size_t(yo) * nxo + xo]) / (255.0f * count);
+      }
+  }
 }
 
 }  // namespace
@@ -45,16 +55,16 @@ VolumeObservation::VolumeObservation(const ObservationParams& params) : params_(
 }
 
 void VolumeObservation::setVolumes(const psfs::ProbabilityVolume& body,
-                                   const psfs::ProbabilityVolume* skin) {
+                                   const psfs::ProbabilityVolume* skin, int threads) {
   body.grid.validate();
   if (body.data.size() != body.grid.numVoxels())
     throw std::invalid_argument("body volume: data size does not match its grid");
   if (skin && (skin->grid != body.grid || skin->data.size() != body.data.size()))
     throw std::invalid_argument("skin volume: grid differs from the body volume's");
-  downsample(body, params_.downsample, &grid_, &body_);
+  downsample(body, params_.downsample, threads, &grid_, &body_);
   if (skin) {
     psfs::VoxelGrid g;
-    downsample(*skin, params_.downsample, &g, &skin_);
+    downsample(*skin, params_.downsample, threads, &g, &skin_);
   } else {
     skin_.assign(body_.size(), 0.0f);
   }

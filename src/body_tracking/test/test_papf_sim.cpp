@@ -75,7 +75,7 @@ struct Stats {
 
 // Bars: the are 16 mm (hands), 15 mm (head) and 25 mm (elbows); the thesis measured
 // 32.1 mm for the hands on real data. What the defaults measure on this sequence (seed 3) is
-// hands 22.1 mm, head 12.5 mm, elbows 36.3 mm, shoulders 35.2 mm (other seeds within ~2 mm):
+// hands 19.8 mm, head 11.3 mm, elbows 34.3 mm, shoulders 30.3 mm (other seeds within ~2 mm):
 // the hands and elbows miss the bars (a few frames of each fast reach lag behind, and
 // the mean-likelihood observation pulls the shoulders ~2 cm into the trunk). The bars below
 // guard today's figures with ~30 % margin, because the volumes, and with them the particle

@@ -27,6 +27,9 @@ struct BodyLimits {
   bool satisfied(const BodyState& s, double tolerance = 1e-6) const;
   // Moves the state onto the nearest allowed one, joint by joint.
   void enforce(BodyState* s) const;
+  // The same for the joints of state coordinates [first, first + count) only (a PAPF partition:
+  // the others are left as they are).
+  void enforce(BodyState* s, int first, int count) const;
 };
 
 }  // namespace body_tracking

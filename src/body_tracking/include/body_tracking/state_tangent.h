@@ -20,7 +20,15 @@ using Tangent = Eigen::Matrix<double, kTangentDim, 1>;
 // (rad), 6 spine bend, 7 head yaw, then per arm (left from 8, right from 13): 2 shoulder
 // direction, 1 shift (m), 2 forearm direction in the upper arm's frame.
 Tangent toTangent(const BodyState& at, const BodyState& s);
+// Only the blocks that coordinates [first, first + count) belong to (the rest is zero): what a
+// partition's covariance needs.
+Tangent toTangent(const BodyState& at, const BodyState& s, int first, int count);
 BodyState fromTangent(const BodyState& at, const Tangent& t);
+// The same for a step in coordinates [first, first + count) only (the rest of t is ignored):
+// the joints outside the range keep their values bit for bit (a full fromTangent sends them
+// through their log / exp round trip, which moves them by rounding). What a partition's
+// diffusion needs, at a fraction of the cost.
+BodyState fromTangent(const BodyState& at, const Tangent& t, int first, int count);
 
 // Weighted mean of states (weights >= 0, not all zero), computed in the tangent space at
 // `start` and refined by re-centring `iterations` times. threads: OpenMP threads for the

@@ -36,7 +36,9 @@ class VolumeObservation {
 
   // Takes this frame's volumes (skin may be null: then the body volume alone). The grids must
   // match; throws std::invalid_argument otherwise.
-  void setVolumes(const psfs::ProbabilityVolume& body, const psfs::ProbabilityVolume* skin);
+  // threads: OpenMP threads for the downsampling (the result does not depend on it).
+  void setVolumes(const psfs::ProbabilityVolume& body, const psfs::ProbabilityVolume* skin,
+                  int threads = 1);
   bool ready() const { return !body_.empty(); }
   const psfs::VoxelGrid& grid() const { return grid_; }
 
