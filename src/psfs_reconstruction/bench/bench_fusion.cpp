@@ -10,8 +10,12 @@
 //   bench_fusion --benchmark_filter=... --benchmark_repetitions=5
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <memory>
 
+#include <hwy/targets.h>  // HWY_SSE4
+
+#include "../src/psfs_kernels.h"  // private: the face kernel switch (BM_PsfsFace)
 #include "../test/fusion_test_utils.h"
 #include "psfs_reconstruction/binary_sfs.h"
 #include "psfs_reconstruction/psfs_fusion.h"
@@ -134,6 +138,46 @@ BENCHMARK(BM_Psfs)
     ->Args({16, 1, 1})->Args({8, 1, 1})
     ->Args({4, 1, 0})->Args({4, 2, 0})
     ->ArgNames({"mm", "threads", "scalar"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// The multi-projection volume (16 mm) by face kernel (issue 17: Highway against the
+// hand-written kernels, in one binary). range(0): threads; range(1): kernel, 0 = hand-written
+// (AVX-512, or AVX2 under TABLETOP_SIMD=avx2), 1 = Highway's best target under the same
+// switches, 2 = faceRowScalar (the plain C++ reference), 3 = Highway's portable target (SCALAR),
+// 4 = Highway's SSE4 target (x86; skipped where it is not compiled or supported).
+void BM_PsfsFace(benchmark::State& st) {
+  Workload& w = workload();
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(gridFor(16), w.rig.cameras, to);
+  PsfsOptions o;
+  o.multi_projection = true;
+  o.threads = static_cast<int>(st.range(0));
+  const PsfsFusion fusion(o);
+  const int kernel = static_cast<int>(st.range(1));
+  int64_t hwy_target = detail::hwyRowTarget(kernel == 1, avx512KernelsActive());
+  if (kernel == 4) {
+    const std::vector<int64_t> t = detail::hwyRowTargets();
+    if (std::find(t.begin(), t.end(), int64_t{HWY_SSE4}) == t.end()) {
+      st.SkipWithError("no SSE4 target");
+      return;
+    }
+    hwy_target = HWY_SSE4;
+  }
+  detail::forceFaceRowKernelForTest(kernel == 0 ? -2 : kernel == 2 ? -1 : hwy_target);
+  ProbabilityVolume out;
+  for (auto _ : st) {
+    fusion.fuse(table, w.bilinear, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  detail::forceFaceRowKernelForTest(0);
+  st.counters["voxels_in"] = static_cast<double>(countAbove(out, thresholdByte(o.threshold)));
+  const char* hand = avx512KernelsActive() ? "hand-written AVX-512" : "hand-written AVX2";
+  st.SetLabel(kernel == 0 ? std::string(hand)
+              : kernel == 2 ? std::string("faceRowScalar")
+                            : std::string("Highway ") + detail::hwyTargetName(hwy_target));
+}
+BENCHMARK(BM_PsfsFace)->ArgsProduct({{1, 2}, {0, 1, 2, 3, 4}})->ArgNames({"threads", "kernel"})
+    ->UseRealTime()->Unit(benchmark::kMillisecond);
 
 // pSfS at 16 mm without the multi-projection test: the like-for-like partner of binary SfS.
 void BM_PsfsSingle16(benchmark::State& st) {

@@ -494,14 +494,15 @@ bool useAvx512() { return avx512KernelsActive(); }
 #pragma GCC diagnostic pop
 #endif
 
+// The hand-written x86 kernels where the CPU and switches allow; else Highway's portable
+// target (measured 0.94x faceRowScalar's time, docs/benchmarks.md), like selectPsfsRow.
 template <int K>
 PsfsFaceRowFn pickFace(bool vector) {
 #if PSFS_HAVE_X86_DISPATCH
   if (vector && useAvx512()) return &faceRowAvx512<K>;
   if (vector) return &faceRowAvx2<K>;
 #endif
-  (void)vector;
-  return &faceRowScalar<K>;
+  return hwyFaceRowKernel(hwyRowTarget(false, false), K);
 }
 
 PsfsRowFn referenceRow(int k) {
@@ -515,6 +516,7 @@ PsfsRowFn referenceRow(int k) {
 }
 
 std::atomic<int64_t> g_forced_row_target{0};
+std::atomic<int64_t> g_forced_face_target{0};
 
 }  // namespace
 
@@ -528,15 +530,28 @@ PsfsRowFn selectPsfsRow(int k, bool vector) {
   return hwyRowKernel(hwyRowTarget(vector, avx512KernelsActive()), k);
 }
 
+void forceFaceRowKernelForTest(int64_t target) { g_forced_face_target.store(target); }
+
 PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector) {
-  switch (k) {
+  if (k < 0 || k > kMaxOccludedViews) throw std::invalid_argument("psfs: occluded_views must be in 0..4");
+  const int64_t forced = g_forced_face_target.load(std::memory_order_relaxed);
+  if (forced > 0) return hwyFaceRowKernel(forced, k);
+  if (forced == -1) {
+    switch (k) {
+      case 0: return &faceRowScalar<0>;
+      case 1: return &faceRowScalar<1>;
+      case 2: return &faceRowScalar<2>;
+      case 3: return &faceRowScalar<3>;
+      default: return &faceRowScalar<4>;
+    }
+  }
+  switch (k) {  // 0 and -2: the default
     case 0: return pickFace<0>(vector);
     case 1: return pickFace<1>(vector);
     case 2: return pickFace<2>(vector);
     case 3: return pickFace<3>(vector);
-    case 4: return pickFace<4>(vector);
+    default: return pickFace<4>(vector);
   }
-  throw std::invalid_argument("psfs: occluded_views must be in 0..4");
 }
 
 void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,

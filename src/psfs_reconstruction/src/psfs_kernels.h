@@ -3,15 +3,21 @@
 //  * Single projection (also the footprint levels and the hand sub-volumes): one Google
 //    Highway source for every instruction set (psfs_row_hwy.cpp), checked against the plain
 //    C++ reference in psfs_kernels.cpp.
-//  * Multi-projection (the shared face samples): scalar, AVX2 and AVX-512 kernels in
-//    psfs_kernels.cpp, still hand-written. Their bilinear samples rest on x86's byte
-//    multiply-adds (maddubs + madd) and, on AVX-512, masked gathers; Highway 1.0 (Debian 12)
-//    has neither, so a port needs the lerp in 32-bit arithmetic (three times the instructions
-//    by count; not yet ported or measured).
+//  * Multi-projection (the shared face samples): hand-written AVX-512 and AVX2 kernels
+//    (psfs_kernels.cpp) on x86 CPUs with AVX2; Highway's portable target (psfs_face_hwy.cpp)
+//    everywhere else; faceRowScalar the reference. The Highway kernel (issue 17) serves every
+//    target but measures slower than the hand-written ones (16 mm volume, 1 thread, Zen 5
+//    EPYC, 2026-12-05, docs/benchmarks.md): AVX3 4.25 ms against 3.35 ms (1.27x), AVX2
+//    6.39 ms against 6.03 ms (1.06x). Why: Highway 1.0 (Debian 12) has no byte multiply-add
+//    (maddubs), so its column lerp takes ~8 32-bit operations where AVX2 needs 3 and AVX-512's
+//    16-entry weight tables (vpermd) 2; no getexp / getmant for the log term's split; and no
+//    masked gathers. Its portable targets beat the reference: SCALAR 42.1 ms, SSE4 26.0 ms
+//    against faceRowScalar's 44.7 ms.
 // The plain C++ reference kernels are made of the per-voxel functions of voxel_arithmetic.h,
 // which the CUDA kernels (gpu_psfs_fusion.h) run too: one source for the arithmetic.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -34,6 +40,8 @@ PsfsRowFn selectPsfsRow(int k, bool vector);
 std::vector<int64_t> hwyRowTargets();             // compiled and supported by this CPU
 PsfsRowFn hwyRowKernel(int64_t target, int k);    // target from hwyRowTargets()
 const char* hwyTargetName(int64_t target);
+// Index of a target in Highway's dispatch tables (HWY_DISPATCH_TABLE of any exported kernel).
+size_t hwyDispatchIndex(int64_t target);
 // The best compiled target this CPU supports: any (avx512), any but the AVX-512 ones, or only
 // the portable one (EMU128 or SCALAR, whichever is built) when !vector.
 int64_t hwyRowTarget(bool vector, bool avx512);
@@ -64,6 +72,12 @@ using PsfsFaceRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres,
                                const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
                                uint8_t* out);
 PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector);
+// The Highway face kernels (psfs_face_hwy.cpp), for the targets of hwyRowTargets().
+PsfsFaceRowFn hwyFaceRowKernel(int64_t target, int k);
+// Tests and benchmarks: selectPsfsFaceRow returns this kernel from now on (0: back to normal;
+// -1: faceRowScalar, the reference; -2: the default selection, i.e. the hand-written x86 kernels;
+// else this Highway target's).
+void forceFaceRowKernelForTest(int64_t target);
 
 // The + faces along `axis` (1 = y, 2 = z) of one row, all cameras, into faces[c * nxp + x]:
 // what a walk that starts in the middle of the grid needs from the row below its first one.

@@ -26,62 +26,13 @@
 #include "psfs_reconstruction/projection_table.h"
 #include "psfs_reconstruction/view_evidence.h"
 
+#include "psfs_hwy-inl.h"  // centreTerm, accumulateTerm, finaliseLanes
+
 HWY_BEFORE_NAMESPACE();
 namespace psfs {
 namespace detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
-
-using DI = hn::ScalableTag<int32_t>;
-using DU = hn::RebindToUnsigned<DI>;
-using DF = hn::RebindToFloat<DI>;
-using VI = hn::Vec<DI>;
-using VU = hn::Vec<DU>;
-
-// The camera's log term at each packed centre (PackedUV: u in 1/16 px in the low half, v in
-// the high half, 1/16 px). A 32-bit gather at the term's byte offset, sign-extended from its
-// low half: the terms are readable 4 bytes past the image (ViewEvidence::terms).
-HWY_INLINE VI centreTerm(const KernelView& v, VU uv) {
-  const DI di;
-  const DU du;
-  const VU pix = hn::Add(hn::Mul(hn::ShiftRight<20>(uv), hn::Set(du, static_cast<uint32_t>(v.width))),
-                         hn::ShiftRight<4>(hn::And(uv, hn::Set(du, 0xFFFFu))));
-  const VI g = hn::GatherOffset(di, reinterpret_cast<const int32_t*>(v.terms),
-                                hn::BitCast(di, hn::ShiftLeft<1>(pix)));
-  return hn::ShiftRight<16>(hn::ShiftLeft<16>(g));
-}
-
-// Drop, normalise, decide and map to bytes: finalise() of psfs_kernels.cpp lane by lane.
-template <int K>
-HWY_INLINE void finaliseLanes(const PsfsRowParams& p, VI sum, VI inactive, const VI* m, uint8_t* out,
-                              int count) {
-  const DI di;
-  const DF df;
-  const hn::Rebind<uint8_t, DI> d8;
-  VI n = hn::Sub(hn::Set(di, p.num_cameras), inactive);
-  for (int j = 0; j < K; ++j) {
-    const auto drop = hn::Gt(hn::Set(di, p.drop_below), m[j]);
-    sum = hn::Sub(sum, hn::IfThenElseZero(drop, m[j]));
-    n = hn::Add(n, hn::VecFromMask(di, drop));  // -1 per dropped view
-  }
-  const auto valid = hn::Gt(n, hn::Set(di, p.min_views - 1));
-  // Lanes with no view (n = 0) are invalid; dividing by max(n, 1) keeps them finite, so the
-  // table index below is always in range.
-  auto mean = hn::Mul(hn::ConvertTo(df, sum), hn::Set(df, 1.0f / ViewEvidence::kLogScale));
-  mean = hn::Div(mean, hn::ConvertTo(df, hn::Max(n, hn::Set(di, 1))));
-  mean = hn::Add(mean, hn::Set(df, p.offset));
-  const auto in = hn::RebindMask(di, hn::Gt(mean, hn::Set(df, p.log_t)));
-  auto e = hn::Mul(hn::Sub(hn::Zero(df), mean), hn::Set(df, p.exp_scale));
-  e = hn::Min(e, hn::Set(df, static_cast<float>(p.exp_table_size - 1)));
-  e = hn::Max(e, hn::Zero(df));
-  const VI b = hn::GatherIndex(di, p.exp_table, hn::ConvertTo(di, e));
-  const VI b_in = hn::Max(b, hn::Set(di, p.t_byte + 1));
-  const VI b_out = p.zero_outside ? hn::Zero(di) : hn::Min(b, hn::Set(di, p.t_byte));
-  const VI r = hn::IfThenElseZero(valid, hn::IfThenElse(in, b_in, b_out));
-  HWY_ALIGN uint8_t bytes[hn::MaxLanes(d8)];
-  hn::Store(hn::DemoteTo(d8, r), d8, bytes);
-  std::memcpy(out, bytes, static_cast<size_t>(std::min(static_cast<int>(hn::Lanes(di)), count)));
-}
 
 template <int K>
 void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
@@ -102,14 +53,7 @@ void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
     for (int c = 0; c < p.num_cameras; ++c) {
       const uint32_t* src = centres + size_t(c) * p.nxp + x0;
       const VU uv = left >= lanes ? hn::LoadU(du, src) : hn::MaskedLoad(hn::FirstN(du, left), du, src);
-      VI t = centreTerm(p.views[c], uv);
-      inactive = hn::Sub(inactive, hn::VecFromMask(di, hn::Gt(t, zero)));
-      sum = hn::Add(sum, hn::Min(t, zero));
-      for (int j = 0; j < K; ++j) {  // the K lowest terms, ascending
-        const VI lo = hn::Min(m[j], t);
-        t = hn::Max(m[j], t);
-        m[j] = lo;
-      }
+      accumulateTerm<K>(centreTerm(p.views[c], uv), sum, inactive, m);
     }
     finaliseLanes<K>(p, sum, inactive, m, out + x0, p.nx - x0);
   }
@@ -136,18 +80,16 @@ namespace detail {
 
 HWY_EXPORT(RowKernel);
 
-namespace {
-// Index into Highway's dispatch tables of one target (what ChosenTarget::GetIndex() computes
-// for the chosen one): the fallback (EMU128 or SCALAR) sits in the last slot.
-size_t tableIndexOf(int64_t target) {
+// What ChosenTarget::GetIndex() computes for the chosen target: the fallback (EMU128 or
+// SCALAR) sits in the last slot.
+size_t hwyDispatchIndex(int64_t target) {
   return hwy::Num0BitsBelowLS1Bit_Nonzero64(static_cast<uint64_t>(
       (HWY_CHOSEN_TARGET_SHIFT(target) | HWY_CHOSEN_TARGET_MASK_SCALAR) & HWY_CHOSEN_TARGET_MASK_TARGETS));
 }
-}  // namespace
 
 std::vector<int64_t> hwyRowTargets() { return hwy::SupportedAndGeneratedTargets(); }
 
-PsfsRowFn hwyRowKernel(int64_t target, int k) { return HWY_DISPATCH_TABLE(RowKernel)[tableIndexOf(target)](k); }
+PsfsRowFn hwyRowKernel(int64_t target, int k) { return HWY_DISPATCH_TABLE(RowKernel)[hwyDispatchIndex(target)](k); }
 
 const char* hwyTargetName(int64_t target) { return hwy::TargetName(target); }
 

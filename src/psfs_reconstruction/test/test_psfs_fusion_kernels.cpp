@@ -1,6 +1,7 @@
-// The kernel paths give the same bytes: scalar, AVX2 and AVX-512 fusion kernels and thread
-// splits, the shared multi-projection face samples against a brute force, and the AVX-512 and
-// AVX2 row projections. Part of test_psfs_fusion.
+// The kernel paths give the same bytes: scalar, AVX2 and AVX-512 fusion kernels, every
+// Highway target of the row and face kernels, and thread splits; the shared multi-projection
+// face samples against a brute force; the AVX-512 and AVX2 row projections. Part of
+// test_psfs_fusion.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -115,6 +116,52 @@ TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {
           EXPECT_GT(countAbove(ref, thresholdByte(o.threshold)), 100u) << "the spheres are in the hull";
         }
     }
+}
+
+// The multi-projection (face) kernel has one Highway source too: every compiled target writes
+// the bytes of faceRowScalar on the cases the hand-written kernels are checked on above (a
+// masked view, a camera that sees part of the grid, a row whose last 16-lane step holds one
+// chunk), for every occlusion tolerance, with zero_outside_hull, and with thread splits whose
+// slabs start inside the grid (their first faces come from plusFacesOfRow).
+TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
+  const auto rig = tabletop_capture::makeDefaultRig();
+  std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
+  auto cams = rig.cameras;
+  cams[1].fx *= 2.5;  // part of the grid unobserved by camera 1
+  cams[1].fy *= 2.5;
+  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm),
+                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
+  const std::vector<int64_t> targets = detail::hwyRowTargets();
+  ASSERT_FALSE(targets.empty());
+  for (const VoxelGrid& grid : grids) {
+    ProjectionTableOptions to;
+    to.multi_projection = true;
+    const ProjectionTable table(grid, cams, to);
+    ViewEvidence ev;
+    ev.set(views, true);
+    for (int k : {0, 1, 2, 4})
+      for (bool zero_outside : {false, true}) {
+        PsfsOptions o;
+        o.multi_projection = true;
+        o.occluded_views = k;
+        o.zero_outside_hull = zero_outside;
+        ProbabilityVolume ref;
+        detail::forceFaceRowKernelForTest(-1);
+        PsfsFusion(o).fuse(table, ev, &ref);
+        for (int64_t t : targets)
+          for (int threads : {1, 3}) {
+            o.threads = threads;
+            detail::forceFaceRowKernelForTest(t);
+            ProbabilityVolume out;
+            PsfsFusion(o).fuse(table, ev, &out);
+            detail::forceFaceRowKernelForTest(0);
+            ASSERT_EQ(out.data, ref.data) << detail::hwyTargetName(t) << ", " << grid.describe() << ", k " << k
+                                          << ", zero outside " << zero_outside << ", " << threads << " threads";
+          }
+        detail::forceFaceRowKernelForTest(0);
+        EXPECT_GT(countAbove(ref, thresholdByte(o.threshold)), 100u) << "the spheres are in the hull";
+      }
+  }
 }
 
 // The shared face samples follow the rule of psfs_kernels.h whatever the walk: a brute force

@@ -1,0 +1,283 @@
+// The multi-projection (shared face samples) pSfS row kernel (psfs_kernels.h: PsfsFaceRowFn),
+// one Google Highway source for every instruction set (issue 17), the targets of
+// psfs_row_hwy.cpp (same HWY_DISABLED_TARGETS, so the same dispatch tables). Each target does
+// the integer and float operations of faceRowScalar (psfs_kernels.cpp, the reference) with the
+// same face-buffer protocol, so every target writes the same bytes (test_psfs_fusion_kernels
+// checks all compiled targets against it).
+//
+// Highway 1.0 has neither x86's byte multiply-adds (maddubs) nor masked gathers, so:
+//  * the bilinear lerp runs in 32-bit lanes on packed 16-bit pairs (bilinearLanes), so it
+//    works on every target, SCALAR too; x86 does the index and the row lerp with pmaddwd;
+//  * a face sampled from the upper voxel gathers all lanes (they all stay inside the pair
+//    image's replicated border, like the hand-written kernels' unmasked + face gathers) and
+//    keeps the lanes that need it.
+//
+// It serves the portable path; on x86 with AVX2 the hand-written kernels stay the default, as
+// they measure faster (psfs_kernels.h, docs/benchmarks.md).
+//
+// Highway re-includes this file once per target (foreach_target.h).
+#ifndef HWY_DISABLED_TARGETS
+#define HWY_DISABLED_TARGETS (HWY_SVE | HWY_SVE2 | HWY_SVE_256 | HWY_SVE2_128 | HWY_RVV)
+#endif
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "psfs_face_hwy.cpp"
+#include <hwy/foreach_target.h>  // must come before highway.h
+
+#include <hwy/highway.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "psfs_kernels.h"
+#include "psfs_reconstruction/projection_table.h"
+
+#include "psfs_hwy-inl.h"  // centreTerm, accumulateTerm, finaliseLanes
+
+HWY_BEFORE_NAMESPACE();
+namespace psfs {
+namespace detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// Whether MulAdd is one fused operation (fmaf's single rounding) here. SSE4, SSSE3, SCALAR and
+// EMU128 multiply and add with two roundings: there the log term is logTermOfPair per lane.
+#if (HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2) || \
+    (HWY_TARGET == HWY_NEON && (HWY_ARCH_ARM_A64 || defined(__ARM_VFPV4__)))
+constexpr bool kFusedMulAdd = true;
+#else
+constexpr bool kFusedMulAdd = false;
+#endif
+
+// x86's vector targets multiply and add int16 pairs into int32 in one instruction (pmaddwd,
+// Highway's ReorderWidenMulAccumulate); elsewhere the same sums take 32-bit multiplies.
+#undef PSFS_HWY_PAIR_MUL_ADD
+#if HWY_ARCH_X86 && HWY_TARGET != HWY_SCALAR && HWY_TARGET != HWY_EMU128
+#define PSFS_HWY_PAIR_MUL_ADD 1
+
+// x0 w0 + x1 w1 per 32-bit lane of int16 pairs (x0 | x1 << 16) and (w0 | w1 << 16).
+HWY_INLINE VI pairMulAdd(VU x, VU w) {
+  const DI di;
+  const hn::Repartition<int16_t, DI> d16;
+  VI unused = hn::Zero(di);
+  return hn::RearrangeToOddPlusEven(
+      hn::ReorderWidenMulAccumulate(di, hn::BitCast(d16, x), hn::BitCast(d16, w), hn::Zero(di), unused), unused);
+}
+#else
+#define PSFS_HWY_PAIR_MUL_ADD 0
+#endif
+
+// Bilinear samples at padded fixed-point positions s, packed (su | sv << 16, 1/16 px, origin at
+// pixel -kQuadPad, each in [0, 65535]): the integers of bilinear() (voxel_arithmetic.h).
+HWY_INLINE VI bilinearLanes(const KernelView& v, VU s) {
+  const DI di;
+  const DU du;
+  // Byte offset of the quad (the pair images are uint16): 2 (u0 + v0 stride), u0 = su >> 4,
+  // v0 = sv >> 4.
+#if PSFS_HWY_PAIR_MUL_ADD
+  const hn::Repartition<uint16_t, DI> du16;  // 2 stride < 2^15: PackedUV::kMaxImageSide
+  const VI at = pairMulAdd(hn::BitCast(du, hn::ShiftRight<4>(hn::BitCast(du16, s))),
+                           hn::Set(du, 2u | (2u * v.quad_stride) << 16));
+#else
+  const VI at = hn::BitCast(di, hn::Add(hn::Mul(hn::ShiftRight<20>(s), hn::Set(du, 2u * v.quad_stride)),
+                                        hn::And(hn::ShiftRight<3>(s), hn::Set(du, 0x1FFEu))));
+#endif
+  // Two pairs in one 32-bit lane: bytes (a, c, b, d) = (top left, bottom left, top right,
+  // bottom right).
+  const VU q = hn::BitCast(du, hn::GatherOffset(di, reinterpret_cast<const int32_t*>(v.pairs), at));
+  const VU mask8 = hn::Set(du, 0x00FF00FFu);
+  const VU ab = hn::And(q, mask8), cd = hn::And(hn::ShiftRight<8>(q), mask8);
+  // Both column lerps at once: (left | right << 16) = 16 (a | b << 16) + fv ((c | d << 16) -
+  // (a | b << 16)) is linear in the packed pair, so it holds mod 2^32, and left, right lie in
+  // [0, 4080]: the halves never carry.
+  const VU fv = hn::And(hn::ShiftRight<16>(s), hn::Set(du, 15u));
+  const VU lr = hn::Add(hn::ShiftLeft<4>(ab), hn::Mul(hn::Sub(cd, ab), fv));
+  const VU fu = hn::And(s, hn::Set(du, 15u));
+#if PSFS_HWY_PAIR_MUL_ADD  // left (16 - fu) + right fu, weights (16 - fu | fu << 16)
+  return pairMulAdd(lr, hn::Add(hn::Sub(hn::ShiftLeft<16>(fu), fu), hn::Set(du, 16u)));
+#else
+  // The row lerp is the upper half of one product: (left | right << 16) (fu | (16 - fu) << 16)
+  // = left fu + (left (16 - fu) + right fu) << 16 mod 2^32, with left fu < 2^16 and the
+  // result (<= 255 * 256) < 2^16. fu + (16 - fu) << 16 = fu (1 - 2^16) + 16 << 16.
+  const VU wu = hn::Add(hn::Mul(fu, hn::Set(du, 0xFFFF0001u)), hn::Set(du, 16u << 16));
+  return hn::BitCast(di, hn::ShiftRight<16>(hn::Mul(lr, wu)));
+#endif
+}
+
+// A chunk's sample offset (du | dv << 16, int16 each) as one int32, du + dv 2^16, so that a
+// 32-bit add or subtract moves both packed coordinates (which stay in [0, 65535]).
+HWY_INLINE uint32_t packedOffset(uint32_t off) {
+  return (off & 0xFFFF0000u) + static_cast<uint32_t>(static_cast<int32_t>(static_cast<int16_t>(off & 0xFFFFu)));
+}
+
+// The offsets along `axis` of the chunk(s) under the vector: one chunk of 8 voxels, or two
+// (lanes 0-7 and 8-15) for 16 lanes.
+template <class D>
+HWY_INLINE hn::Vec<D> chunkOffsets(D d, const uint32_t* off0, const uint32_t* off1, int axis) {
+  static_assert(hn::MaxLanes(D()) <= 2 * ProjectionTable::kChunk, "at most two chunks per vector");
+#if HWY_TARGET != HWY_SCALAR  // which has no Combine
+  if constexpr (hn::MaxLanes(D()) > ProjectionTable::kChunk) {
+    const hn::Half<D> dh;
+    return hn::Combine(d, hn::Set(dh, packedOffset(off1[axis])), hn::Set(dh, packedOffset(off0[axis])));
+  }
+#endif
+  (void)off1;
+  return hn::Set(d, packedOffset(off0[axis]));
+}
+
+HWY_INLINE void cswap(VI& a, VI& b) {
+  const VI lo = hn::Min(a, b);
+  b = hn::Max(a, b);
+  a = lo;
+}
+
+HWY_INLINE VI middlePair6Lanes(VI s[6]) {  // = middlePair6
+  cswap(s[0], s[5]), cswap(s[1], s[3]), cswap(s[2], s[4]);
+  cswap(s[1], s[2]), cswap(s[3], s[4]);
+  cswap(s[0], s[3]), cswap(s[2], s[5]);
+  cswap(s[0], s[1]), cswap(s[2], s[3]), cswap(s[4], s[5]);
+  cswap(s[1], s[2]), cswap(s[3], s[4]);
+  return hn::Add(s[2], s[3]);
+}
+
+// -y or -z faces from a face buffer (kNoFace: sample from this voxel at s), and this row's
+// + faces stored back for the next row / layer; `left` entries from buf on belong to this
+// camera's row (the buffer is readable 16 entries past the last one).
+HWY_INLINE VI carryFaces(const KernelView& v, uint16_t* buf, int left, VI plus, hn::Mask<DI> obs, VU s) {
+  const DI di;
+  const hn::Rebind<uint16_t, DI> d16;
+  const VI nf = hn::Set(di, kNoFace);
+  const VI below = hn::PromoteTo(di, hn::LoadU(d16, buf));
+  const auto need = hn::And(obs, hn::Eq(below, nf));
+  const auto keep = hn::DemoteTo(d16, hn::IfThenElse(obs, plus, nf));
+  if (left >= static_cast<int>(hn::Lanes(di))) {
+    hn::StoreU(keep, d16, buf);
+  } else {
+    hn::BlendedStore(keep, hn::FirstN(d16, static_cast<size_t>(left)), d16, buf);
+  }
+  if (hn::AllFalse(di, need)) return below;
+  return hn::IfThenElse(need, bilinearLanes(v, s), below);
+}
+
+// logTermOfPair lane by lane: the same float operations, each fmaf a MulAdd where that is
+// fused, else logTermOfPair itself per lane.
+HWY_INLINE VI logTermLanes(VI m) {
+  const DI di;
+  if constexpr (!kFusedMulAdd) {
+    HWY_ALIGN int32_t lanes[hn::MaxLanes(DI())];
+    hn::Store(m, di, lanes);
+    for (size_t i = 0; i < hn::Lanes(di); ++i) lanes[i] = logTermOfPair(lanes[i]);
+    return hn::Load(di, lanes);
+  } else {
+    const DF df;
+    const auto x = hn::ConvertTo(df, hn::Max(m, hn::Set(di, 256)));
+    const VI bits = hn::BitCast(di, x);
+    const auto e = hn::ConvertTo(df, hn::Sub(hn::ShiftRight<23>(bits), hn::Set(di, 127)));
+    const auto f = hn::BitCast(df, hn::Or(hn::And(bits, hn::Set(di, 0x007FFFFF)), hn::Set(di, 0x3F800000)));
+    const auto t = hn::Sub(f, hn::Set(df, 1.0f));
+    auto p = hn::Set(df, kLnP6);
+    p = hn::MulAdd(p, t, hn::Set(df, kLnP5));
+    p = hn::MulAdd(p, t, hn::Set(df, kLnP4));
+    p = hn::MulAdd(p, t, hn::Set(df, kLnP3));
+    p = hn::MulAdd(p, t, hn::Set(df, kLnP2));
+    p = hn::MulAdd(p, t, hn::Set(df, kLnP1));
+    p = hn::MulAdd(p, t, hn::Set(df, kLnP0));
+    const auto lnx = hn::MulAdd(e, hn::Set(df, kLn2), hn::Mul(p, t));
+    // NearestInt rounds to nearest even, as rintf does in the default rounding mode.
+    return hn::NearestInt(hn::Mul(hn::Sub(lnx, hn::Set(df, kLnFullPair)), hn::Set(df, float(kVoxLogScale))));
+  }
+}
+
+// Lane i of the result: lane i - 1 of v; lane 0: first. up: kUp's indices.
+template <class Indices>
+HWY_INLINE VI shiftUpOne(VI v, int32_t first, const Indices& up) {
+  const DI di;
+  return hn::IfThenElse(hn::FirstN(di, 1), hn::Set(di, first), hn::TableLookupLanes(v, up));
+}
+
+template <int K>
+void faceRowHwy(const PsfsRowParams& p, const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
+                uint16_t* zface, uint8_t* out) {
+  const DI di;
+  const DU du;
+  const int lanes = static_cast<int>(hn::Lanes(di));
+  const VI zero = hn::Zero(di), no_ev = hn::Set(di, kVoxNoEvidence);
+  const VU pad = hn::Set(du, static_cast<uint32_t>(kPad16) * 0x10001u);  // both coordinates
+  HWY_ALIGN static constexpr int32_t kUp[16] = {0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14};
+  const auto up = hn::SetTableIndices(di, kUp);
+  thread_local std::vector<int32_t> carry_store;
+  carry_store.assign(size_t(p.num_cameras), -1);
+  int32_t* carry = carry_store.data();  // +x face of voxel x0 - 1 per camera, -1: not observed
+  // The row's projections are read once per frame: fetch them without letting them push the
+  // evidence images (gathered every frame) out of the caches.
+  for (int i = 0; i < p.num_cameras * p.nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
+  for (int x0 = 0; x0 < p.nxp; x0 += lanes) {
+    // nxp holds whole chunks of 8: only 16 lanes can overhang it (by one chunk), and those
+    // lanes load centre 0 (sampled in bounds, never stored).
+    const int left = p.nxp - x0;
+    const bool whole = left >= lanes;
+    const int chunk = x0 / ProjectionTable::kChunk;
+    VI sum = zero, inactive = zero;
+    VI m[K > 0 ? K : 1];
+    for (int j = 0; j < K; ++j) m[j] = no_ev;
+    for (int c = 0; c < p.num_cameras; ++c) {
+      const KernelView& v = p.views[c];
+      const uint32_t* src = centres + size_t(c) * p.nxp + x0;
+      const VU uv = whole ? hn::LoadU(du, src) : hn::MaskedLoad(hn::FirstN(du, left), du, src);
+      auto obs = hn::RebindMask(di, hn::Ne(uv, hn::Set(du, v.not_observed)));
+      if (!whole) obs = hn::And(obs, hn::FirstN(di, left));
+      const VU base = hn::Add(uv, pad);
+      const uint32_t* off0 = offsets + (size_t(c) * p.chunks + chunk) * 3;
+      const uint32_t* off1 = left > ProjectionTable::kChunk ? off0 + 3 : off0;
+      VU d[3];
+      VI s[6];
+      for (int a = 0; a < 3; ++a) {
+        d[a] = chunkOffsets(du, off0, off1, a);
+        s[2 * a + 1] = bilinearLanes(v, hn::Add(base, d[a]));
+      }
+      // -x faces: the previous voxel's +x face where it is observed.
+      const int32_t cf = carry[c];
+      s[0] = shiftUpOne(s[1], cf, up);
+      const auto lower = hn::MaskFromVec(shiftUpOne(hn::VecFromMask(di, obs), cf >= 0 ? -1 : 0, up));
+      const auto need = hn::AndNot(lower, obs);
+      if (!hn::AllFalse(di, need)) s[0] = hn::IfThenElse(need, bilinearLanes(v, hn::Sub(base, d[0])), s[0]);
+      carry[c] = hn::ExtractLane(hn::VecFromMask(di, obs), lanes - 1) ? hn::ExtractLane(s[1], lanes - 1) : -1;
+      s[2] = carryFaces(v, yface + size_t(c) * p.nxp + x0, left, s[3], obs, hn::Sub(base, d[1]));
+      s[4] = carryFaces(v, zface + size_t(c) * p.nxp + x0, left, s[5], obs, hn::Sub(base, d[2]));
+      const VI tm = logTermLanes(middlePair6Lanes(s));
+      // No evidence: not observed, or (with an active mask) the centre's pixel switched off.
+      const auto off_view = v.has_mask ? hn::Gt(centreTerm(v, uv), zero) : hn::Not(obs);
+      accumulateTerm<K>(hn::IfThenElse(off_view, no_ev, tm), sum, inactive, m);
+    }
+    // Fewer than 8 lanes: the row's last vectors may hold only padding.
+    if (x0 < p.nx) finaliseLanes<K>(p, sum, inactive, m, out + x0, p.nx - x0);
+  }
+}
+
+PsfsFaceRowFn FaceRowKernel(int k) {
+  switch (k) {
+    case 0: return &faceRowHwy<0>;
+    case 1: return &faceRowHwy<1>;
+    case 2: return &faceRowHwy<2>;
+    case 3: return &faceRowHwy<3>;
+    default: return &faceRowHwy<4>;
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace detail
+}  // namespace psfs
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace psfs {
+namespace detail {
+
+HWY_EXPORT(FaceRowKernel);
+
+PsfsFaceRowFn hwyFaceRowKernel(int64_t target, int k) {
+  return HWY_DISPATCH_TABLE(FaceRowKernel)[hwyDispatchIndex(target)](k);
+}
+
+}  // namespace detail
+}  // namespace psfs
+#endif  // HWY_ONCE
