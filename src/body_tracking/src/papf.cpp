@@ -173,11 +173,36 @@ void Papf::crossoverAndDiffuse(int partition) {
   const BodyState& centre = particles_[best];
   const int threads = std::max(1, params_.threads);
   using Sub = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxPartitionDims, 1>;
+  struct Draw {
+    int a, b, g, d;
+    Sub z;
+  };
   std::vector<Sub> t(n);
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (int i = 0; i < n; ++i)
-    t[i] = weights_[i] > 0 ? Sub(toTangent(centre, particles_[i], ps.first, ps.count).segment(ps.first, ps.count))
-                           : Sub(Sub::Zero(ps.count));
+  std::vector<Draw> draws(n);
+  // Every random number is drawn by one thread, in a fixed order, so the result does not depend
+  // on the thread count; the draws need only the weights, so they run beside the tangents.
+#pragma omp parallel num_threads(threads)
+  {
+#pragma omp single nowait
+    {
+      std::uniform_real_distribution<double> uni(0.0, 1.0);
+      std::normal_distribution<double> normal(0.0, 1.0);
+      std::uniform_int_distribution<int> cut(0, ps.count);
+      for (Draw& dr : draws) {
+        dr.a = drawIndex(uni(rng_));
+        dr.b = drawIndex(uni(rng_));
+        dr.g = cut(rng_);
+        dr.d = cut(rng_);
+        if (dr.g > dr.d) std::swap(dr.g, dr.d);
+        dr.z.resize(ps.count);
+        for (int j = 0; j < ps.count; ++j) dr.z[j] = normal(rng_);
+      }
+    }
+#pragma omp for schedule(dynamic, 16)
+    for (int i = 0; i < n; ++i)
+      t[i] = weights_[i] > 0 ? Sub(toTangent(centre, particles_[i], ps.first, ps.count).segment(ps.first, ps.count))
+                             : Sub(Sub::Zero(ps.count));
+  }
   Sub tm = Sub::Zero(ps.count);
   for (int i = 0; i < n; ++i) tm += weights_[i] * t[i];
   using SubCov = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPartitionDims, kMaxPartitionDims>;
@@ -189,25 +214,6 @@ void Papf::crossoverAndDiffuse(int partition) {
   cov = params_.diffusion * cov;
   cov.diagonal().array() += 1e-10;
   const SubCov L = Eigen::LLT<SubCov>(cov).matrixL();
-  // Every random number is drawn first, in a fixed order, so the result does not depend on the
-  // thread count; the children in parallel.
-  std::uniform_real_distribution<double> uni(0.0, 1.0);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  std::uniform_int_distribution<int> cut(0, ps.count);
-  struct Draw {
-    int a, b, g, d;
-    Sub z;
-  };
-  std::vector<Draw> draws(n);
-  for (Draw& dr : draws) {
-    dr.a = drawIndex(uni(rng_));
-    dr.b = drawIndex(uni(rng_));
-    dr.g = cut(rng_);
-    dr.d = cut(rng_);
-    if (dr.g > dr.d) std::swap(dr.g, dr.d);
-    dr.z.resize(ps.count);
-    for (int j = 0; j < ps.count; ++j) dr.z[j] = normal(rng_);
-  }
   scratch_.resize(n);
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (int i = 0; i < n; ++i) {

@@ -75,22 +75,24 @@ void VolumeObservation::setVolumes(const psfs::ProbabilityVolume& body,
     blended_[i] = (1.0f - k) * body_[i] + k * skin_[i];
     if (body_[i] > 0.5f) ++occupied_;
   }
-  buildRowSums(grid_, body_, &body_sums_);
-  buildRowSums(grid_, blended_, &blended_sums_);
+  buildRowSums(grid_, body_, threads, &body_sums_);
+  buildRowSums(grid_, blended_, threads, &blended_sums_);
 }
 
 void VolumeObservation::buildRowSums(const psfs::VoxelGrid& g, const std::vector<float>& y,
-                                     RowSums* out) {
+                                     int threads, RowSums* out) {
   const int nx = g.dims.x();
-  const size_t rows = g.numRows();
-  out->s0.assign(rows * (nx + 1), 0.0);
-  out->s1.assign(rows * (nx + 1), 0.0);
-  out->s2.assign(rows * (nx + 1), 0.0);
-  for (size_t r = 0; r < rows; ++r) {
+  const long rows = static_cast<long>(g.numRows());
+  out->s0.resize(rows * (nx + 1));
+  out->s1.resize(rows * (nx + 1));
+  out->s2.resize(rows * (nx + 1));
+#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static)
+  for (long r = 0; r < rows; ++r) {
     const float* row = &y[r * nx];
     double* a = &out->s0[r * (nx + 1)];
     double* b = &out->s1[r * (nx + 1)];
     double* c = &out->s2[r * (nx + 1)];
+    a[0] = b[0] = c[0] = 0.0;
     for (int x = 0; x < nx; ++x) {
       a[x + 1] = a[x] + row[x];
       b[x + 1] = b[x] + static_cast<double>(x) * row[x];

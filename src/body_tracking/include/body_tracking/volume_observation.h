@@ -64,7 +64,8 @@ class VolumeObservation {
   const RowSums& rowSums(bool skin_part) const { return skin_part ? blended_sums_ : body_sums_; }
 
  private:
-  static void buildRowSums(const psfs::VoxelGrid& g, const std::vector<float>& y, RowSums* out);
+  static void buildRowSums(const psfs::VoxelGrid& g, const std::vector<float>& y, int threads,
+                           RowSums* out);
 
   ObservationParams params_;
   psfs::VoxelGrid grid_;
