@@ -34,6 +34,73 @@ namespace detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+#if HWY_TARGET == HWY_SCALAR
+constexpr int kScalarBlock = 64;
+
+// Cameras c0 .. c0 + G - 1 added to the accumulators of voxels x0 .. x0 + n - 1.
+template <int K, int G>
+HWY_INLINE void addCameras(const PsfsRowParams& p, const uint32_t* centres, int c0, int x0, int n,
+                           int32_t* sum, int32_t* inactive, int32_t (*m)[kScalarBlock]) {
+  const uint32_t* src[G];
+  const int16_t* terms[G];
+  int width[G];
+  for (int k = 0; k < G; ++k) {
+    src[k] = centres + size_t(c0 + k) * p.nxp + x0;
+    terms[k] = p.views[c0 + k].terms;
+    width[k] = p.views[c0 + k].width;
+  }
+  for (int i = 0; i < n; ++i) {
+    int32_t t[G];
+    for (int k = 0; k < G; ++k) t[k] = terms[k][pixelOf(src[k][i], width[k])];
+    int32_t in = 0, s = 0;
+    for (int k = 0; k < G; ++k) {
+      in += t[k] > 0;
+      s += minI(t[k], 0);
+    }
+    inactive[i] += in;
+    sum[i] += s;
+    for (int k = 0; k < G; ++k)
+      for (int j = 0; j < K; ++j) {
+        const int32_t lo = minI(m[j][i], t[k]);
+        t[k] = maxI(m[j][i], t[k]);
+        m[j][i] = lo;
+      }
+  }
+}
+
+// The one-lane target (the portable fallback): the vector loop below would finish one voxel
+// before it starts the next. Here the loops are turned inside out, camera outer and voxel inner
+// over a block of the row, so neighbouring voxels are independent work the CPU overlaps. Each
+// voxel still adds its cameras in order and is finalised by voxel_arithmetic.h: the bytes of
+// the reference (rowScalar).
+template <int K>
+void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
+  constexpr int kBlock = kScalarBlock;
+  for (int i = 0; i < p.num_cameras * p.nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
+  for (int x0 = 0; x0 < p.nx; x0 += kBlock) {
+    const int n = std::min(kBlock, p.nx - x0);
+    int32_t sum[kBlock], inactive[kBlock], m[K > 0 ? K : 1][kBlock];  // of voxels x0 + i
+    for (int i = 0; i < n; ++i) {
+      sum[i] = inactive[i] = 0;
+      for (int j = 0; j < K; ++j) m[j][i] = kVoxNoEvidence;
+    }
+    // 8 or 4 cameras per pass (then the rest one by one): a fraction of the accumulators' loads and
+    // stores, and the views' pointers held in registers (integer sums, so the grouping changes
+    // no value; the K lowest still see the cameras in order).
+    int c = 0;
+    for (; c + 8 <= p.num_cameras; c += 8)
+      addCameras<K, 8>(p, centres, c, x0, n, sum, inactive, m);
+    for (; c + 4 <= p.num_cameras; c += 4)
+      addCameras<K, 4>(p, centres, c, x0, n, sum, inactive, m);
+    for (; c < p.num_cameras; ++c) addCameras<K, 1>(p, centres, c, x0, n, sum, inactive, m);
+    for (int i = 0; i < n; ++i) {
+      int32_t mi[K > 0 ? K : 1];
+      for (int j = 0; j < K; ++j) mi[j] = m[j][i];
+      out[x0 + i] = finalise(p, sum[i], p.num_cameras - inactive[i], mi, K);
+    }
+  }
+}
+#else
 template <int K>
 void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
   const DI di;
@@ -58,6 +125,7 @@ void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
     finaliseLanes<K>(p, sum, inactive, m, out + x0, p.nx - x0);
   }
 }
+#endif  // HWY_TARGET == HWY_SCALAR
 
 PsfsRowFn RowKernel(int k) {
   switch (k) {

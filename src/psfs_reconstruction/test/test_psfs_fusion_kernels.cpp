@@ -80,15 +80,21 @@ TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {
   auto cams = rig.cameras;
   cams[1].fx *= 2.5;  // part of the grid unobserved by camera 1
   cams[1].fy *= 2.5;
-  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm),
-                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
+  // The portable (SCALAR) kernel works on blocks of 64 voxels and groups of 8, 4 and 1
+  // cameras: a 70-wide grid and 7 cameras take every tail.
+  const VoxelGrid grids[3] = {referenceGrid(Resolution::k16mm),
+                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37),
+                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 70)};
   const std::vector<int64_t> targets = detail::hwyRowTargets();
   ASSERT_FALSE(targets.empty());
   std::string names;
   for (int64_t t : targets) names += std::string(" ") + detail::hwyTargetName(t);
   std::printf("[ figures  ] Highway row targets on this CPU:%s\n", names.c_str());
+  for (const int num_cameras : {8, 7})
   for (const VoxelGrid& grid : grids)
     for (bool footprint : {false, true}) {
+      cams.resize(num_cameras);
+      views.resize(num_cameras);
       ProjectionTableOptions to;
       to.footprint_levels = footprint ? 3 : 0;
       const ProjectionTable table(grid, cams, to);
@@ -109,6 +115,7 @@ TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {
             PsfsFusion(o).fuse(table, ev, &out);
             detail::forceRowKernelForTest(0);
             ASSERT_EQ(out.data, ref.data) << detail::hwyTargetName(t) << ", " << grid.describe()
+                                          << ", " << num_cameras << " cameras"
                                           << ", footprint " << footprint << ", k " << k
                                           << ", zero outside " << zero_outside;
           }
