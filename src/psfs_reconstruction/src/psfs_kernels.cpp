@@ -9,6 +9,7 @@
 
 #include "cpu_dispatch.h"
 #include "psfs_reconstruction/projection_table.h"
+#include "psfs_reconstruction/simd_dispatch.h"
 #include "psfs_reconstruction/view_evidence.h"
 
 #if PSFS_HAVE_X86_DISPATCH
@@ -494,15 +495,17 @@ bool useAvx512() { return avx512KernelsActive(); }
 #pragma GCC diagnostic pop
 #endif
 
-// The hand-written x86 kernels where the CPU and switches allow; else Highway's portable
-// target (measured 0.94x faceRowScalar's time, docs/benchmarks.md), like selectPsfsRow.
+// The hand-written x86 kernels where the CPU and switches allow; else the Highway kernel, like
+// selectPsfsRow (its SCALAR target measured 0.94x faceRowScalar's time, SSE4 0.58x;
+// docs/benchmarks.md).
 template <int K>
 PsfsFaceRowFn pickFace(bool vector) {
 #if PSFS_HAVE_X86_DISPATCH
   if (vector && useAvx512()) return &faceRowAvx512<K>;
   if (vector) return &faceRowAvx2<K>;
 #endif
-  return hwyFaceRowKernel(hwyRowTarget(false, false), K);
+  // No AVX2 (an older x86, ARM): Highway's best target (SSE4, NEON), unless scalar is forced.
+  return hwyFaceRowKernel(hwyRowTarget(!scalarKernelsForced(), false), K);
 }
 
 PsfsRowFn referenceRow(int k) {
@@ -527,7 +530,9 @@ PsfsRowFn selectPsfsRow(int k, bool vector) {
   const int64_t forced = g_forced_row_target.load(std::memory_order_relaxed);
   if (forced == -1) return referenceRow(k);
   if (forced != 0) return hwyRowKernel(forced, k);
-  return hwyRowKernel(hwyRowTarget(vector, avx512KernelsActive()), k);
+  // `vector` is false on a CPU without AVX2 (an older x86, ARM): Highway's best target there
+  // (SSE4, NEON) unless the scalar kernels are forced.
+  return hwyRowKernel(hwyRowTarget(vector || !scalarKernelsForced(), avx512KernelsActive()), k);
 }
 
 void forceFaceRowKernelForTest(int64_t target) { g_forced_face_target.store(target); }

@@ -44,6 +44,8 @@ bool avx2Available() {
 
 void forceScalarKernels(bool force) { g_force_scalar.store(force); }
 
+bool scalarKernelsForced() { return g_force_scalar.load(std::memory_order_relaxed); }
+
 bool vectorKernelsActive() { return avx2Available() && !g_force_scalar.load(std::memory_order_relaxed); }
 
 bool avx512Available() {

@@ -125,6 +125,22 @@ TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {
     }
 }
 
+// On a CPU without AVX2 (an older x86, ARM) the callers' `vector` is false; the Highway kernels
+// must still take the CPU's best target there (SSE4, NEON), and only a forced scalar run the
+// portable one.
+TEST(PsfsFusion, WithoutAvx2TheHighwayKernelsTakeTheBestTarget) {
+  const bool was_forced = scalarKernelsForced();  // TABLETOP_SIMD=scalar
+  forceScalarKernels(false);
+  const int64_t best = detail::hwyRowTarget(true, avx512KernelsActive());
+  const int64_t portable = detail::hwyRowTarget(false, false);
+  EXPECT_EQ(detail::selectPsfsRow(1, false), detail::hwyRowKernel(best, 1));
+  EXPECT_EQ(detail::selectPsfsFaceRow(1, false), detail::hwyFaceRowKernel(detail::hwyRowTarget(true, false), 1));
+  forceScalarKernels(true);
+  EXPECT_EQ(detail::selectPsfsRow(1, false), detail::hwyRowKernel(portable, 1));
+  EXPECT_EQ(detail::selectPsfsFaceRow(1, false), detail::hwyFaceRowKernel(portable, 1));
+  forceScalarKernels(was_forced);
+}
+
 // The multi-projection (face) kernel has one Highway source too: every compiled target writes
 // the bytes of faceRowScalar on the cases the hand-written kernels are checked on above (a
 // masked view, a camera that sees part of the grid, a row whose last 16-lane step holds one

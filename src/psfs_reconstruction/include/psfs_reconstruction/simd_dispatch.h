@@ -1,8 +1,12 @@
-// Which kernels fusion runs. The pSfS row loop exists three times: AVX-512 (16 voxels per step,
-// where the CPU has AVX-512 F+BW), AVX2 (gathers, 8 voxels per step) and portable scalar code,
-// all doing the same integer/float operations in the same order, so all give identical bytes. The AVX2 copies are compiled with function-level target attributes and
-// chosen at run time, so the package needs no -march flag and still runs on any x86-64 (or
-// other) CPU.
+// Which kernels fusion runs. All kernels of one kind do the same integer and float operations
+// in the same order, so all give identical bytes:
+//  * the single-projection row kernel (also footprint levels and hand sub-volumes) is one Google
+//    Highway source, dispatched at run time to the best target the CPU has (AVX-512, AVX2, SSE4
+//    on x86; NEON on ARM), or to Highway's portable target when the scalar kernels are forced;
+//  * the multi-projection (face) kernels are hand-written AVX-512 and AVX2 code on x86 CPUs with
+//    AVX2 (measured faster than their Highway version, psfs_kernels.h), else the Highway one.
+// The x86 copies are compiled with function-level target attributes, so the package needs no
+// -march flag and still runs on any x86-64 (or other) CPU.
 #pragma once
 
 // The environment variable TABLETOP_SIMD=avx2 (or =scalar) makes a process start with the AVX2
@@ -16,6 +20,9 @@ bool avx2Available();
 void forceScalarKernels(bool force);
 // True if the AVX2 kernels are used now.
 bool vectorKernelsActive();
+// True if the portable (scalar) kernels are forced (forceScalarKernels, TABLETOP_SIMD=scalar):
+// without it the Highway kernels take the CPU's best target, AVX2 or not.
+bool scalarKernelsForced();
 // True if the CPU supports AVX-512 F and BW (and this build has those kernels).
 bool avx512Available();
 // Limits the vector kernels to AVX2 even where AVX-512 exists (tests compare all paths).
