@@ -26,6 +26,12 @@ bool bodyCollides(const BodyProfile& profile, const BodyFrames& f, const BodyPar
   const TruncatedQuadric& chest = parts[static_cast<int>(Part::CHEST)];
   const TruncatedQuadric& abdomen = parts[static_cast<int>(Part::ABDOMEN)];
   const TruncatedQuadric& head = parts[static_cast<int>(Part::HEAD)];
+  // The head grown by half a hand's width: a hand whose centre comes that close lies on the
+  // face. The face is skin, so the skin-weighted hand part scores as well there as on the real
+  // hand, and a hand that waved past the head stayed locked on the face for seconds (generated
+  // scenarios, wave and reach_targets). A hand held against the face is given up for it.
+  const Eigen::Vector3d head_reach = head.semi + Eigen::Vector3d::Constant(profile.hand_half_width);
+  const Eigen::Isometry3d head_inverse = head.frame.inverse();
   for (int i = 0; i < 2; ++i) {
     // The bone's axis inside the trunk means the limb is inside it (its surface merely touching
     // the trunk leaves the axis a limb radius outside).
@@ -33,6 +39,7 @@ bool bodyCollides(const BodyProfile& profile, const BodyFrames& f, const BodyPar
                             0.5 * (f.elbow[i] + f.wrist[i]), f.wrist[i], f.hand[i]};
     for (const Vector3d& p : pts)
       if (chest.contains(p) || abdomen.contains(p) || head.contains(p)) return true;
+    if ((head_inverse * f.hand[i]).cwiseQuotient(head_reach).squaredNorm() < 1.0) return true;
   }
   // Forearms through each other (not merely touching).
   return segmentDistance(f.elbow[0], f.wrist[0], f.elbow[1], f.wrist[1]) <

@@ -319,7 +319,7 @@ TEST(ArmIk, PutsTheHandOnReachableTargets) {
   EXPECT_GT(reachable, 200);
 }
 
-TEST(PartCollision, ArmThroughTheChestCollidesHandsOnTheDeskDoNot) {
+TEST(PartCollision, ArmThroughTheChestOrHandOnTheFaceCollidesHandsOnTheDeskDoNot) {
   const BodyProfile profile;
   BodyState rest;
   const tabletop_sim::BodyPose sp = tabletop_sim::BodyModel::restPose();
@@ -341,6 +341,18 @@ TEST(PartCollision, ArmThroughTheChestCollidesHandsOnTheDeskDoNot) {
   }
   f = forwardKinematics(profile, s);
   EXPECT_TRUE(bodyCollides(profile, f, buildParts(profile, f)));
+  // A hand on the face, its centre 3 cm in front of the head part (the face is skin: the hand
+  // part would lock on to it), collides; the same hand beside the head, 25 cm out, does not.
+  f = forwardKinematics(profile, rest);
+  const Vector3d face = f.head_centre + f.chest.linear() * Vector3d(0.0, profile.head_half_depth + 0.03, 0.0);
+  const Vector3d beside = f.head_centre + f.chest.linear() * Vector3d(-0.25, 0.0, 0.0);
+  for (const auto& [target, collides] : {std::pair<Vector3d, bool>{face, true}, {beside, false}}) {
+    s = rest;
+    ASSERT_TRUE(solveArmIk(profile, Side::LEFT, target, f.shoulder[0] + Vector3d(-0.3, 0, -0.3), &s));
+    const BodyFrames g = forwardKinematics(profile, s);
+    EXPECT_EQ(bodyCollides(profile, g, buildParts(profile, g)), collides)
+        << "hand " << (g.hand[0] - g.head_centre).norm() << " m from the head centre";
+  }
 }
 
 TEST(BodyProfile, YamlMergeAndErrors) {

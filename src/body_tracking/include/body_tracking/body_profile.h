@@ -1,7 +1,7 @@
 // The person's measurements: bone lengths and part radii of the quadric body model. Loaded from
 // a YAML body profile (config/body_profile.yaml documents every field); the defaults are the
-// medium-sized adult of the simulated rig (tabletop_sim/body_model.h), and the tracker refines
-// lengths and radii online over the first seconds (body_shape_estimator.h).
+// medium-sized adult of the simulated rig (tabletop_sim/body_model.h). The tracker does not
+// refine them online yet: give a user of another build their own profile.
 #pragma once
 
 #include <string>
