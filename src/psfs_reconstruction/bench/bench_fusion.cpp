@@ -139,6 +139,19 @@ BENCHMARK(BM_Psfs)
     ->Args({4, 1, 0})->Args({4, 2, 0})
     ->ArgNames({"mm", "threads", "scalar"})->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// The default multi-projection volume (16 mm): its table, and the fusion options on `threads`.
+ProjectionTable multiTable16(const Workload& w) {
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  return ProjectionTable(gridFor(16), w.rig.cameras, to);
+}
+PsfsOptions multiOptions(int threads) {
+  PsfsOptions o;
+  o.multi_projection = true;
+  o.threads = threads;
+  return o;
+}
+
 // The multi-projection volume (16 mm) by face kernel (issue 17: Highway against the
 // hand-written kernels, in one binary). range(0): threads; range(1): kernel, 0 = hand-written
 // (AVX-512, or AVX2 under TABLETOP_SIMD=avx2), 1 = Highway's best target under the same
@@ -146,13 +159,8 @@ BENCHMARK(BM_Psfs)
 // 4 = Highway's SSE4 target (x86; skipped where it is not compiled or supported).
 void BM_PsfsFace(benchmark::State& st) {
   Workload& w = workload();
-  ProjectionTableOptions to;
-  to.multi_projection = true;
-  const ProjectionTable table(gridFor(16), w.rig.cameras, to);
-  PsfsOptions o;
-  o.multi_projection = true;
-  o.threads = static_cast<int>(st.range(0));
-  const PsfsFusion fusion(o);
+  const ProjectionTable table = multiTable16(w);
+  const PsfsFusion fusion(multiOptions(static_cast<int>(st.range(0))));
   const int kernel = static_cast<int>(st.range(1));
   int64_t hwy_target = detail::hwyRowTarget(kernel == 1, avx512KernelsActive());
   if (kernel == 4) {
@@ -170,7 +178,7 @@ void BM_PsfsFace(benchmark::State& st) {
     benchmark::DoNotOptimize(out.data.data());
   }
   detail::forceFaceRowKernelForTest(0);
-  st.counters["voxels_in"] = static_cast<double>(countAbove(out, thresholdByte(o.threshold)));
+  st.counters["voxels_in"] = static_cast<double>(countAbove(out, thresholdByte(fusion.options().threshold)));
   const char* hand = avx512KernelsActive() ? "hand-written AVX-512" : "hand-written AVX2";
   st.SetLabel(kernel == 0 ? std::string(hand)
               : kernel == 2 ? std::string("faceRowScalar")
@@ -234,17 +242,12 @@ BENCHMARK(BM_PsfsFootprint)
 // like-for-like partner of BM_PsfsFootprint/evidence:1.
 void BM_PsfsMultiWithEvidence(benchmark::State& st) {
   Workload& w = workload();
-  ProjectionTableOptions to;
-  to.multi_projection = true;
-  const ProjectionTable table(gridFor(16), w.rig.cameras, to);
-  PsfsOptions o;
-  o.multi_projection = true;
-  o.threads = static_cast<int>(st.range(0));
-  const PsfsFusion fusion(o);
+  const ProjectionTable table = multiTable16(w);
+  const PsfsFusion fusion(multiOptions(static_cast<int>(st.range(0))));
   ViewEvidence ev;
   ProbabilityVolume out;
   for (auto _ : st) {
-    ev.set(w.views, true, o.threads);
+    ev.set(w.views, true, fusion.options().threads);
     fusion.fuse(table, ev, &out);
     benchmark::DoNotOptimize(out.data.data());
   }

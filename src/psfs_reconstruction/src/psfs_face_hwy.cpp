@@ -254,13 +254,7 @@ void faceRowHwy(const PsfsRowParams& p, const uint32_t* centres, const uint32_t*
 }
 
 PsfsFaceRowFn FaceRowKernel(int k) {
-  switch (k) {
-    case 0: return &faceRowHwy<0>;
-    case 1: return &faceRowHwy<1>;
-    case 2: return &faceRowHwy<2>;
-    case 3: return &faceRowHwy<3>;
-    default: return &faceRowHwy<4>;
-  }
+  return byOcclusion(k, [&](auto K) -> PsfsFaceRowFn { return &faceRowHwy<decltype(K)::value>; });
 }
 
 }  // namespace HWY_NAMESPACE

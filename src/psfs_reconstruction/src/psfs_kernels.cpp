@@ -509,13 +509,7 @@ PsfsFaceRowFn pickFace(bool vector) {
 }
 
 PsfsRowFn referenceRow(int k) {
-  switch (k) {
-    case 0: return &rowScalar<0>;
-    case 1: return &rowScalar<1>;
-    case 2: return &rowScalar<2>;
-    case 3: return &rowScalar<3>;
-    default: return &rowScalar<4>;
-  }
+  return byOcclusion(k, [&](auto K) -> PsfsRowFn { return &rowScalar<decltype(K)::value>; });
 }
 
 std::atomic<int64_t> g_forced_row_target{0};
@@ -542,21 +536,10 @@ PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector) {
   const int64_t forced = g_forced_face_target.load(std::memory_order_relaxed);
   if (forced > 0) return hwyFaceRowKernel(forced, k);
   if (forced == -1) {
-    switch (k) {
-      case 0: return &faceRowScalar<0>;
-      case 1: return &faceRowScalar<1>;
-      case 2: return &faceRowScalar<2>;
-      case 3: return &faceRowScalar<3>;
-      default: return &faceRowScalar<4>;
-    }
+    return byOcclusion(k, [&](auto K) -> PsfsFaceRowFn { return &faceRowScalar<decltype(K)::value>; });
   }
-  switch (k) {  // 0 and -2: the default
-    case 0: return pickFace<0>(vector);
-    case 1: return pickFace<1>(vector);
-    case 2: return pickFace<2>(vector);
-    case 3: return pickFace<3>(vector);
-    default: return pickFace<4>(vector);
-  }
+  // 0 and -2: the default
+  return byOcclusion(k, [&](auto K) -> PsfsFaceRowFn { return pickFace<decltype(K)::value>(vector); });
 }
 
 void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,

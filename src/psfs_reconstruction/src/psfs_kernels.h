@@ -19,6 +19,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "voxel_arithmetic.h"
@@ -50,6 +51,20 @@ int64_t hwyRowTarget(bool vector, bool avx512);
 void forceRowKernelForTest(int64_t target);
 
 constexpr int kMaxOccludedViews = 4;
+
+// f(std::integral_constant<int, K>{}) for K = k (0 .. kMaxOccludedViews; larger k as the
+// largest): how a kernel template is picked by occlusion tolerance, e.g.
+// byOcclusion(k, [](auto K) -> PsfsRowFn { return &rowScalar<decltype(K)::value>; }).
+template <class F>
+auto byOcclusion(int k, F&& f) {
+  switch (k) {
+    case 0: return f(std::integral_constant<int, 0>{});
+    case 1: return f(std::integral_constant<int, 1>{});
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    default: return f(std::integral_constant<int, 4>{});
+  }
+}
 
 // ---- multi-projection: shared face samples ------------------------------------------------
 // A voxel's 6 samples are its face centres (ProjectionTable::rowOffsets: centre +- half a voxel

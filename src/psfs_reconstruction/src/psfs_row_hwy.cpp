@@ -128,13 +128,7 @@ void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
 #endif  // HWY_TARGET == HWY_SCALAR
 
 PsfsRowFn RowKernel(int k) {
-  switch (k) {
-    case 0: return &rowHwy<0>;
-    case 1: return &rowHwy<1>;
-    case 2: return &rowHwy<2>;
-    case 3: return &rowHwy<3>;
-    default: return &rowHwy<4>;
-  }
+  return byOcclusion(k, [&](auto K) -> PsfsRowFn { return &rowHwy<decltype(K)::value>; });
 }
 
 }  // namespace HWY_NAMESPACE
