@@ -25,7 +25,8 @@ void downsample(const psfs::ProbabilityVolume& in, int f, int threads, psfs::Vox
 #pragma omp parallel for num_threads(std::max(1, threads)) schedule(static)
   for (int zo = 0; zo < nzo; ++zo) {
     std::vector<int32_t> sum(size_t(nxo) * nyo, 0);
-    for (int z = zo * f; z < std::min(d.z(), zo * f + f); ++z)
+    const int cz = extent(zo, d.z());
+    for (int z = zo * f; z < zo * f + cz; ++z)
       for (int y = 0; y < d.y(); ++y) {
         const uint8_t* row = &in.data[in.grid.index(0, y, z)];
         int32_t* acc = &sum[size_t(y / f) * nxo];
@@ -33,7 +34,6 @@ void downsample(const psfs::ProbabilityVolume& in, int f, int threads, psfs::Vox
           for (const int x1 = std::min(d.x(), x + f); x < x1; ++x) acc[xo] += row[x];
       }
     float* o = out->data() + size_t(nxo) * nyo * zo;
-    const int cz = extent(zo, d.z());
     for (int yo = 0; yo < nyo; ++yo)
       for (int xo = 0; xo < nxo; ++xo) {
         const int count = cz * extent(yo, d.y()) * extent(xo, d.x());

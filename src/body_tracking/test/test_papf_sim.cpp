@@ -85,8 +85,8 @@ struct Stats {
 // got worse hands in 10 of 10 without it (docs/benchmarks.md). The hands and elbows miss the
 // issue's bars (a few frames of each fast reach lag behind, and the mean-likelihood observation
 // pulls the shoulders ~2 cm into the trunk). The bars below guard the medians with ~30 % margin,
-// because the volumes, and with them the particle trajectories, differ slightly between
-// machines (AVX2 and AVX-512 fusion kernels).
+// because any change upstream moves every later particle (the fusion kernels give the same bytes
+// on every instruction set: TABLETOP_SIMD=avx2 prints the same medians).
 constexpr double kHandMeanBar = 0.028, kHeadMeanBar = 0.017, kElbowMeanBar = 0.048;
 
 bool sameState(const BodyState& a, const BodyState& b) {

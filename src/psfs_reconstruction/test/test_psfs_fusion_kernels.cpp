@@ -22,21 +22,28 @@ namespace {
 
 using test::Sphere;
 
+// The kernel tests' cameras: the default rig with camera 1 zoomed in, so it sees only part of
+// the grid and rows, columns and layers switch between observed and unobserved voxels (the face
+// kernels' fallbacks).
+std::vector<tabletop_capture::CameraModel> partlyObservingCameras() {
+  auto cams = tabletop_capture::makeDefaultRig().cameras;
+  cams[1].fx *= 2.5;
+  cams[1].fy *= 2.5;
+  return cams;
+}
+
+// 37 voxels wide: rows padded to 40, so the AVX-512 kernels' last step per row has a single
+// chunk of 8 (5 voxels and 3 of padding).
+VoxelGrid oddWidthGrid() { return cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37); }
+
 TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
   if (!avx2Available()) {
     GTEST_SKIP() << "no AVX2 on this CPU: only the scalar kernels exist";
   }
   const auto rig = tabletop_capture::makeDefaultRig();
   std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
-  // Camera 1 zoomed in: it sees only part of the grid, so rows, columns and layers switch
-  // between observed and unobserved voxels (the face kernels' fallbacks).
-  auto cams = rig.cameras;
-  cams[1].fx *= 2.5;
-  cams[1].fy *= 2.5;
-  // The reference grid, and one 37 voxels wide: rows padded to 40, so the AVX-512 kernel's
-  // last step per row has a single chunk of 8 (5 voxels and 3 of padding).
-  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm),
-                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
+  const auto cams = partlyObservingCameras();
+  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm), oddWidthGrid()};
   for (const VoxelGrid& grid : grids)
   for (bool multi : {false, true})
     for (int k : {0, 1, 2, 4}) {
@@ -77,13 +84,10 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
 TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {
   const auto rig = tabletop_capture::makeDefaultRig();
   std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
-  auto cams = rig.cameras;
-  cams[1].fx *= 2.5;  // part of the grid unobserved by camera 1
-  cams[1].fy *= 2.5;
+  auto cams = partlyObservingCameras();
   // The portable (SCALAR) kernel works on blocks of 64 voxels and groups of 8, 4 and 1
   // cameras: a 70-wide grid and 7 cameras take every tail.
-  const VoxelGrid grids[3] = {referenceGrid(Resolution::k16mm),
-                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37),
+  const VoxelGrid grids[3] = {referenceGrid(Resolution::k16mm), oddWidthGrid(),
                               cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 70)};
   const std::vector<int64_t> targets = detail::hwyRowTargets();
   ASSERT_FALSE(targets.empty());
@@ -149,11 +153,8 @@ TEST(PsfsFusion, WithoutAvx2TheHighwayKernelsTakeTheBestTarget) {
 TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
   const auto rig = tabletop_capture::makeDefaultRig();
   std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
-  auto cams = rig.cameras;
-  cams[1].fx *= 2.5;  // part of the grid unobserved by camera 1
-  cams[1].fy *= 2.5;
-  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm),
-                              cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};
+  const auto cams = partlyObservingCameras();
+  const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm), oddWidthGrid()};
   const std::vector<int64_t> targets = detail::hwyRowTargets();
   ASSERT_FALSE(targets.empty());
   for (const VoxelGrid& grid : grids) {
@@ -191,10 +192,7 @@ TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
 // per voxel (each face from the table and the likelihood bytes directly) against the walk the
 // reference variants use, on a rig where one camera sees only part of the grid.
 TEST(PsfsFusion, FaceSamplesFollowTheSharingRule) {
-  const auto rig = tabletop_capture::makeDefaultRig();
-  auto cams = rig.cameras;
-  cams[1].fx *= 2.5;
-  cams[1].fy *= 2.5;
+  const auto cams = partlyObservingCameras();
   const std::vector<Sphere> spheres = {{Eigen::Vector3d(0.0, 0.0, 0.3), 0.2}};
   std::vector<ViewImage> views;
   std::vector<cv::Mat> images;
