@@ -9,6 +9,9 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
+#include "cvephands_bridge/eval/scenario_evaluation.h"
 #include "cvephands_bridge/eval/suite_report.h"
 
 namespace {
@@ -44,6 +47,7 @@ ScenarioFigures good(const std::string& name) {
   f.psfs_ms = 50, f.mpf_ms = 1, f.wall_s = 10;
   f.body_hand_mm = 20, f.body_head_mm = 12, f.body_elbow_mm = 35, f.body_shoulder_mm = 30;
   f.body_hand_max_mm = 60, f.body_head_max_mm = 25;
+  f.body_upper_arm_deg = 8, f.body_forearm_deg = 11, f.body_elbow_flex_deg = 9;
   f.body_tracked_fraction = 1.0, f.body_untracked_frames = 0, f.body_starts = 1;
   f.body_restarts = 0, f.body_losses = 0, f.body_false_frames_empty = 0, f.papf_ms = 25;
   return f;
@@ -245,6 +249,7 @@ TEST(SuiteBody, BodyMeasuresAggregateMedianAndWorstDecileWithMissingAndNeverTrac
   s[9].body_hand_mm = kInf;  // the person there, never a pose: the worst
   ScenarioFigures off = good("off");
   off.body_hand_mm = off.body_head_mm = off.body_elbow_mm = off.body_shoulder_mm = kNaN;
+  off.body_upper_arm_deg = off.body_forearm_deg = off.body_elbow_flex_deg = kNaN;
   off.body_tracked_fraction = off.body_untracked_frames = off.body_starts = kNaN;
   off.body_restarts = off.body_losses = off.body_false_frames_empty = off.papf_ms = kNaN;
   EXPECT_FALSE(off.bodyRan());
@@ -260,6 +265,8 @@ TEST(SuiteBody, BodyMeasuresAggregateMedianAndWorstDecileWithMissingAndNeverTrac
   EXPECT_DOUBLE_EQ(summaryOf(sums, "body_head_mm").worst, 19.0);
   EXPECT_DOUBLE_EQ(summaryOf(sums, "body_elbow_mm").median, 75.0);
   EXPECT_DOUBLE_EQ(summaryOf(sums, "body_elbow_mm").worst_decile, 110.0);
+  EXPECT_EQ(summaryOf(sums, "body_forearm_deg").count, 10);
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_forearm_deg").median, 11.0);
   // Tracked fraction: higher is better, the worst decile is the second lowest.
   EXPECT_DOUBLE_EQ(summaryOf(sums, "body_tracked_fraction").worst_decile, 0.60);
   EXPECT_DOUBLE_EQ(summaryOf(sums, "body_tracked_fraction").worst, 0.55);
@@ -300,7 +307,8 @@ TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
   cvephands::ReportContext c;
   const std::string md = cvephands::markdownReport(s, cvephands::summarize(s), c);
   EXPECT_NE(md.find("## Upper body (PAPF)"), std::string::npos) << md;
-  EXPECT_NE(md.find("| default | all | 1.000 | 0 | 1 | 0 | 0 | 20.0 | 60.0 | 12.0 | 25.0 | 35.0 | 30.0 | 25.0 |"),
+  EXPECT_NE(md.find("| default | all | 1.000 | 0 | 1 | 0 | 0 | 20.0 | 60.0 | 12.0 | 25.0 | 35.0 | 30.0 | "
+                    "8.0 | 11.0 | 9.0 | 25.0 |"),
             std::string::npos) << md;
   EXPECT_NE(md.find("| random-7 | all | 0.500 | 50 | 4 | 0 | 0 | 250.0 | 60.0 | never |"), std::string::npos) << md;
   EXPECT_NE(md.find("| random-8 | all | - |"), std::string::npos);
@@ -310,6 +318,7 @@ TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
             std::string::npos) << md;
   EXPECT_NE(md.find("| PAPF head centre (mm) | 2 | never | never | never |"), std::string::npos) << md;
   EXPECT_NE(md.find("| PAPF tracked fraction | 2 | 0.750 | 0.500 | 0.500 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| PAPF elbow flexion (deg) | 2 | 9.0 | 9.0 | 9.0 |"), std::string::npos) << md;
   // The reference bars: reported with a verdict, never asserted.
   EXPECT_NE(md.find("| PAPF head centre median <= 15.0 mm | never | FAIL |"), std::string::npos) << md;
   EXPECT_NE(md.find("| PAPF elbows median <= 25.0 mm | 35.0 | FAIL |"), std::string::npos) << md;
@@ -320,6 +329,7 @@ TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
   // The PAPF off everywhere (--no-body): a line says so, no table.
   for (auto& f : s) {
     f.body_hand_mm = f.body_head_mm = f.body_elbow_mm = f.body_shoulder_mm = kNaN;
+    f.body_upper_arm_deg = f.body_forearm_deg = f.body_elbow_flex_deg = kNaN;
     f.body_tracked_fraction = kNaN;
   }
   c.asserted = "regression";
@@ -329,6 +339,37 @@ TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
   // ...and the asserted regression set has no PAPF floor to fail as "not measured".
   EXPECT_EQ(off.find("PAPF head centre median"), std::string::npos) << off;
   EXPECT_NE(off.find("regression bars: all PASS"), std::string::npos) << off;
+}
+
+TEST(SuiteBody, ArmAngleErrorsAreBoneDirectionsAndTheElbowFlexionInDegrees) {
+  using Eigen::Vector3d;
+  const Vector3d s(0.17, -0.5, 0.4), e = s + Vector3d(0, 0, -0.29), w = e + Vector3d(0, -0.26, 0);
+  // The same arm: no error.
+  cvephands::ArmAngleErrors a = cvephands::armAngleErrors(s, e, w, s, e, w);
+  EXPECT_NEAR(a.upper_arm_deg, 0.0, 1e-9);
+  EXPECT_NEAR(a.forearm_deg, 0.0, 1e-9);
+  EXPECT_NEAR(a.elbow_flex_deg, 0.0, 1e-9);
+  // The whole arm swung 30 degrees about the shoulder (x axis), and moved 5 cm: both bones 30
+  // degrees off, the flexion (90 degrees) the same; lengths and position do not matter.
+  const Eigen::AngleAxisd r(30.0 * M_PI / 180.0, Vector3d::UnitX());
+  const Vector3d off(0.05, 0, 0);
+  const Vector3d e2 = s + off + 1.1 * (r * (e - s));
+  a = cvephands::armAngleErrors(s + off, e2, e2 + 0.9 * (r * (w - e)), s, e, w);
+  EXPECT_NEAR(a.upper_arm_deg, 30.0, 1e-9);
+  EXPECT_NEAR(a.forearm_deg, 30.0, 1e-9);
+  EXPECT_NEAR(a.elbow_flex_deg, 0.0, 1e-9);
+  // A straight arm against the bent truth: the upper arm right, the forearm and flexion 90 off.
+  a = cvephands::armAngleErrors(s, e, e + Vector3d(0, 0, -0.26), s, e, w);
+  EXPECT_NEAR(a.upper_arm_deg, 0.0, 1e-9);
+  EXPECT_NEAR(a.forearm_deg, 90.0, 1e-9);
+  EXPECT_NEAR(a.elbow_flex_deg, 90.0, 1e-9);
+  // A truth without joints (no person) or a zero-length bone is not scored.
+  const Vector3d nan = Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  a = cvephands::armAngleErrors(s, e, w, nan, nan, nan);
+  EXPECT_TRUE(std::isnan(a.upper_arm_deg) && std::isnan(a.forearm_deg) && std::isnan(a.elbow_flex_deg));
+  a = cvephands::armAngleErrors(s, s, w, s, e, w);
+  EXPECT_TRUE(std::isnan(a.upper_arm_deg));
+  EXPECT_TRUE(std::isnan(a.elbow_flex_deg));
 }
 
 TEST(SuiteReport, ValuesAreFormattedWithNotMeasuredAndNeverSpelledOut) {

@@ -114,6 +114,14 @@ double meanOf(double a, double b) {
   return std::isfinite(a) ? a : b;
 }
 
+// Angle between two vectors in degrees; NaN if either is not finite or has no length.
+double angleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double na = a.norm(), nb = b.norm();
+  if (!a.allFinite() || !b.allFinite() || na < 1e-9 || nb < 1e-9) return kNaN;
+  // atan2 of |a x b| and a . b: exact near 0 and 180 degrees, where acos of the dot loses digits.
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI;
+}
+
 // The PAPF after one frame: tracking state, starts, losses and the errors against the truth
 // (the conventions of body_tracking's test_papf_sim; scenario_evaluation.h).
 void scoreBody(const body_tracking::BodyEstimate& e, const sim::GroundTruth& g, bool was_tracking,
@@ -130,7 +138,13 @@ void scoreBody(const body_tracking::BodyEstimate& e, const sim::GroundTruth& g, 
   if (!e.tracking) return;
   ++b->tracked_frames;
   double hand[2], elbow[2], shoulder[2];
+  ArmAngleErrors angles[2];
   for (int i = 0; i < 2; ++i) {
+    angles[i] = armAngleErrors(e.frames.shoulder[i], e.frames.elbow[i], e.frames.wrist[i],
+                               g.shoulder[i], g.elbow[i], g.wrist[i]);
+    if (std::isfinite(angles[i].upper_arm_deg)) b->upper_arm_deg.add(angles[i].upper_arm_deg);
+    if (std::isfinite(angles[i].forearm_deg)) b->forearm_deg.add(angles[i].forearm_deg);
+    if (std::isfinite(angles[i].elbow_flex_deg)) b->elbow_flex_deg.add(angles[i].elbow_flex_deg);
     const bool in_ws = i == 0 ? g.left_hand_in_workspace : g.right_hand_in_workspace;
     hand[i] = in_ws ? distMm(e.hands.position[i], i == 0 ? g.left_hand : g.right_hand) : kNaN;
     elbow[i] = distMm(e.frames.elbow[i], g.elbow[i]);
@@ -145,15 +159,30 @@ void scoreBody(const body_tracking::BodyEstimate& e, const sim::GroundTruth& g, 
   sf->body_head_mm = head;
   sf->body_elbow_mm = meanOf(elbow[0], elbow[1]);
   sf->body_shoulder_mm = meanOf(shoulder[0], shoulder[1]);
+  sf->body_upper_arm_deg = meanOf(angles[0].upper_arm_deg, angles[1].upper_arm_deg);
+  sf->body_forearm_deg = meanOf(angles[0].forearm_deg, angles[1].forearm_deg);
+  sf->body_elbow_flex_deg = meanOf(angles[0].elbow_flex_deg, angles[1].elbow_flex_deg);
 }
 
 }  // namespace
+
+ArmAngleErrors armAngleErrors(const Eigen::Vector3d& shoulder, const Eigen::Vector3d& elbow,
+                              const Eigen::Vector3d& wrist, const Eigen::Vector3d& true_shoulder,
+                              const Eigen::Vector3d& true_elbow, const Eigen::Vector3d& true_wrist) {
+  const Eigen::Vector3d upper = elbow - shoulder, fore = wrist - elbow;
+  const Eigen::Vector3d true_upper = true_elbow - true_shoulder, true_fore = true_wrist - true_elbow;
+  ArmAngleErrors a;
+  a.upper_arm_deg = angleDeg(upper, true_upper);
+  a.forearm_deg = angleDeg(fore, true_fore);
+  a.elbow_flex_deg = std::abs(angleDeg(upper, fore) - angleDeg(true_upper, true_fore));
+  return a;
+}
 
 double BodyTrackingFigures::trackedFraction() const {
   return ran && person_frames > 0 ? double(tracked_frames) / person_frames : kNaN;
 }
 
-double BodyTrackingFigures::meanMm(const tabletop_common::RunningStats& s) const {
+double BodyTrackingFigures::meanError(const tabletop_common::RunningStats& s) const {
   if (!ran || person_frames == 0) return kNaN;
   if (s.count() == 0) return person_frames >= kNeverTrackedMinFrames ? kInf : kNaN;
   return s.mean();
@@ -353,15 +382,18 @@ double ScenarioEvalResult::trackedFraction() const {
 
 std::string ScenarioEvalResult::bodySummary() const {
   if (!body.ran) return "  PAPF: off\n";
-  char buf[512];
+  char buf[768];
   std::snprintf(buf, sizeof(buf),
                 "  PAPF: tracked %d/%d person frames (%d untracked), %d start(s), %d loss(es), %d "
                 "empty-scene frames tracked; hands %.1f mm (max %.1f), head %.1f (max %.1f), "
-                "elbows %.1f (max %.1f), shoulders %.1f (max %.1f); %.1f ms per set\n",
+                "elbows %.1f (max %.1f), shoulders %.1f (max %.1f); arm angles: upper arms %.1f "
+                "deg, forearms %.1f, elbow flexion %.1f; %.1f ms per set\n",
                 body.tracked_frames, body.person_frames, body.untrackedFrames(), body.starts,
-                body.losses, body.empty_tracked_frames, body.meanMm(body.hand_mm), body.hand_mm.max(),
-                body.meanMm(body.head_mm), body.head_mm.max(), body.meanMm(body.elbow_mm),
-                body.elbow_mm.max(), body.meanMm(body.shoulder_mm), body.shoulder_mm.max(),
+                body.losses, body.empty_tracked_frames, body.meanError(body.hand_mm), body.hand_mm.max(),
+                body.meanError(body.head_mm), body.head_mm.max(), body.meanError(body.elbow_mm),
+                body.elbow_mm.max(), body.meanError(body.shoulder_mm), body.shoulder_mm.max(),
+                body.meanError(body.upper_arm_deg), body.meanError(body.forearm_deg),
+                body.meanError(body.elbow_flex_deg),
                 body.papf_ms.mean());
   return buf;
 }

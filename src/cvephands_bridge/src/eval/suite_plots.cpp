@@ -131,7 +131,7 @@ bool writeBodyBarsPlot(const std::string& path, const std::vector<ScenarioFigure
                        int panel_height) {
   return writeSuiteBarsPlot(path, scenarios, {bodyReferenceBars()},
                             {"body_hand_mm", "body_head_mm", "body_elbow_mm", "body_shoulder_mm",
-                             "body_tracked_fraction"},
+                             "body_upper_arm_deg", "body_forearm_deg", "body_tracked_fraction"},
                             width, panel_height);
 }
 

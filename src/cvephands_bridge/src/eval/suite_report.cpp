@@ -59,7 +59,9 @@ std::string bodySection(const std::vector<ScenarioFigures>& scenarios,
   s += "The upper-body tracker (body_tracking's PAPF, seeded with the scenario seed) on the same "
        "body and skin volumes, scored as test_papf_sim scores it: on the person frames with a "
        "pose reported, hands (the estimate's hands vs the palm + fingers centroid), head centre, "
-       "elbows and shoulders, both sides pooled, mean mm; `never` = the person there for a "
+       "elbows and shoulders, both sides pooled, mean mm; the arms' angle errors (upper-arm and "
+       "forearm directions, elbow flexion; from the joint positions), mean degrees; `never` = "
+       "the person there for a "
        "second or more and no pose ever reported. Untracked: person frames without a pose "
        "(before the first start, or after a loss); starts include the first; losses: the pose "
        "dropped with the person there; empty: empty-scene frames with a pose. No design bar, "
@@ -68,12 +70,13 @@ std::string bodySection(const std::vector<ScenarioFigures>& scenarios,
        "poorly to generated scenarios today (arms fold into the trunk; docs/benchmarks.md, "
        "\"PAPF upper-body tracker\"), and these figures show it.\n\n";
   s += "| scenario | script | tracked | untracked | starts | losses | empty | hands | hands max | "
-       "head | head max | elbows | shoulders | PAPF ms |\n";
-  s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+       "head | head max | elbows | shoulders | upper arms deg | forearms deg | elbow flexion deg | "
+       "PAPF ms |\n";
+  s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const ScenarioFigures& f : scenarios) {
     s += "| " + cell(f.name) + " | " + cell(f.script) + " | ";
     if (!f.ran()) {
-      s += "- | - | - | - | - | - | - | - | - | - | - | **failed to run** |\n";
+      s += "- | - | - | - | - | - | - | - | - | - | - | - | - | - | **failed to run** |\n";
       continue;
     }
     s += fmt(f.body_tracked_fraction, 3) + " | " + fmt(f.body_untracked_frames, 0) + " | " +
@@ -81,7 +84,9 @@ std::string bodySection(const std::vector<ScenarioFigures>& scenarios,
          fmt(f.body_false_frames_empty, 0) + " | " + fmt(f.body_hand_mm, 1) + " | " +
          fmt(f.body_hand_max_mm, 1) + " | " + fmt(f.body_head_mm, 1) + " | " +
          fmt(f.body_head_max_mm, 1) + " | " + fmt(f.body_elbow_mm, 1) + " | " +
-         fmt(f.body_shoulder_mm, 1) + " | " + fmt(f.papf_ms, 1) + " |\n";
+         fmt(f.body_shoulder_mm, 1) + " | " + fmt(f.body_upper_arm_deg, 1) + " | " +
+         fmt(f.body_forearm_deg, 1) + " | " + fmt(f.body_elbow_flex_deg, 1) + " | " +
+         fmt(f.papf_ms, 1) + " |\n";
   }
   s += "\nOver " + std::to_string(ran) + " scenarios with the PAPF:\n\n";
   s += "| measure | scenarios | median | worst decile | worst |\n|---|---:|---:|---:|---:|\n";
@@ -136,10 +141,13 @@ ScenarioFigures ScenarioFigures::of(const ScenarioEvalResult& r) {
   f.wall_s = r.wall_s;
   const BodyTrackingFigures& b = r.body;
   if (b.ran) {
-    f.body_hand_mm = b.meanMm(b.hand_mm);
-    f.body_head_mm = b.meanMm(b.head_mm);
-    f.body_elbow_mm = b.meanMm(b.elbow_mm);
-    f.body_shoulder_mm = b.meanMm(b.shoulder_mm);
+    f.body_hand_mm = b.meanError(b.hand_mm);
+    f.body_head_mm = b.meanError(b.head_mm);
+    f.body_elbow_mm = b.meanError(b.elbow_mm);
+    f.body_shoulder_mm = b.meanError(b.shoulder_mm);
+    f.body_upper_arm_deg = b.meanError(b.upper_arm_deg);
+    f.body_forearm_deg = b.meanError(b.forearm_deg);
+    f.body_elbow_flex_deg = b.meanError(b.elbow_flex_deg);
     if (b.hand_mm.count()) f.body_hand_max_mm = b.hand_mm.max();
     if (b.head_mm.count()) f.body_head_max_mm = b.head_mm.max();
     f.body_tracked_fraction = b.trackedFraction();
@@ -191,6 +199,10 @@ const std::vector<MeasureDef>& suiteMeasures() {
       {"body_head_mm", "PAPF head centre", "mm", Better::kLower, &F::body_head_mm, 1},
       {"body_elbow_mm", "PAPF elbows", "mm", Better::kLower, &F::body_elbow_mm, 1},
       {"body_shoulder_mm", "PAPF shoulders", "mm", Better::kLower, &F::body_shoulder_mm, 1},
+      {"body_upper_arm_deg", "PAPF upper-arm direction", "deg", Better::kLower,
+       &F::body_upper_arm_deg, 1},
+      {"body_forearm_deg", "PAPF forearm direction", "deg", Better::kLower, &F::body_forearm_deg, 1},
+      {"body_elbow_flex_deg", "PAPF elbow flexion", "deg", Better::kLower, &F::body_elbow_flex_deg, 1},
       {"body_tracked_fraction", "PAPF tracked fraction", "", Better::kHigher,
        &F::body_tracked_fraction, 3},
       {"body_untracked_frames", "PAPF person frames without a pose", "", Better::kLower,
@@ -356,6 +368,7 @@ BarSet bodyReferenceBars() {
 
 std::vector<std::string> bodyMeasureKeys() {
   return {"body_hand_mm",          "body_head_mm",  "body_elbow_mm", "body_shoulder_mm",
+          "body_upper_arm_deg",    "body_forearm_deg", "body_elbow_flex_deg",
           "body_tracked_fraction", "body_untracked_frames", "body_restarts", "body_losses",
           "body_false_frames_empty"};
 }

@@ -1,8 +1,8 @@
 // scenario_suite: the accuracy bars of DESIGN.md section 6 over a suite of simulated scenarios
 // (issue 15). Each scenario runs the whole per-frame pipeline in process (scenario_evaluation.h:
 // render -> pSfS -> MPF, volumes vs the occupancy oracle, hands and head vs the truth, hand
-// meshes vs the true surface; the upper-body PAPF on the same volumes, hands, head, elbows and
-// shoulders vs the truth, unless --no-body); the suite aggregates the figures (median, worst
+// meshes vs the true surface; the upper-body PAPF on the same volumes, hands, head, elbows,
+// shoulders and arm angles vs the truth, unless --no-body); the suite aggregates the figures (median, worst
 // decile; see suite_report.h) and writes <out>/report.md, <out>/suite_bars.png,
 // <out>/body_bars.png (with the PAPF) and per scenario
 // <name>_tracking.png, <name>_volumes.png, <name>_frames.csv and <name>_summary.txt (the
@@ -176,16 +176,19 @@ bool writeFramesCsv(const std::string& path, const cvephands::ScenarioEvalResult
   std::ofstream out(path);
   out << "frame,time_s,person,body_iou,body_precision,body_recall,skin_iou,skin_precision,"
          "skin_recall,body_voxels,skin_voxels,active_targets,psfs_ms,mpf_ms,papf_tracking,"
-         "papf_started,papf_hand_mm,papf_head_mm,papf_elbow_mm,papf_shoulder_mm,papf_ms\n";
+         "papf_started,papf_hand_mm,papf_head_mm,papf_elbow_mm,papf_shoulder_mm,papf_ms,"
+         "papf_upper_arm_deg,papf_forearm_deg,papf_elbow_flex_deg\n";
   char buf[512];
   for (const cvephands::ScenarioFrame& f : r.frames) {
     std::snprintf(buf, sizeof(buf),
-                  "%d,%.3f,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%d,%.2f,%.3f,%d,%d,%.1f,%.1f,%.1f,%.1f,%.2f\n",
+                  "%d,%.3f,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%d,%.2f,%.3f,%d,%d,%.1f,%.1f,%.1f,%.1f,%.2f,"
+                  "%.1f,%.1f,%.1f\n",
                   f.frame, f.time, f.person ? 1 : 0, f.body_iou, f.body_precision, f.body_recall,
                   f.skin_iou, f.skin_precision, f.skin_recall, f.body_voxels, f.skin_voxels,
                   f.active_targets, f.psfs_ms, f.mpf_ms, f.body_tracking ? 1 : 0,
                   f.body_started ? 1 : 0, f.body_hand_mm, f.body_head_mm, f.body_elbow_mm,
-                  f.body_shoulder_mm, f.papf_ms);
+                  f.body_shoulder_mm, f.papf_ms, f.body_upper_arm_deg, f.body_forearm_deg,
+                  f.body_elbow_flex_deg);
     out << buf;
   }
   return bool(out);
@@ -321,7 +324,8 @@ int main(int argc, char** argv) {
                cvephands::formatValue(f.body_hand_mm, 1) + ", head " +
                cvephands::formatValue(f.body_head_mm, 1) + ", elbows " +
                cvephands::formatValue(f.body_elbow_mm, 1) + ", shoulders " +
-               cvephands::formatValue(f.body_shoulder_mm, 1) + " mm";
+               cvephands::formatValue(f.body_shoulder_mm, 1) + " mm, forearms " +
+               cvephands::formatValue(f.body_forearm_deg, 1) + " deg";
       std::fprintf(stderr, "%s%s: body IoU %.3f, hands %s mm, head %s mm, mesh %s mm%s, %.1f s\n",
                    tty ? "\r" : "", head, f.body_iou, cvephands::formatValue(f.hand_skin_mm, 1).c_str(),
                    cvephands::formatValue(f.head_mm, 1).c_str(),

@@ -32,8 +32,9 @@
 // frames where the PAPF reports a pose, hands = the estimate's (refined) hands against the palm +
 // fingers centroid (GroundTruth::left_hand / right_hand), head = head_centre against the head
 // ellipsoid's centre, elbows and shoulders against GroundTruth::elbow / shoulder, both sides
-// pooled, Euclidean, mm. A hand or the head is scored where it is in the workspace, the joints
-// where the truth is finite.
+// pooled, Euclidean, mm; and the arms' joint angles (armAngleErrors: upper-arm and forearm
+// directions, elbow flexion, degrees) against the truth's shoulders, elbows and wrists. A hand
+// or the head is scored where it is in the workspace, the joints where the truth is finite.
 // Timings are recorded for information only; nothing here or in the suite judges speed.
 //
 // Part of cvephands_eval (simulator, reconstruction, tracker and meshing cores; no ROS).
@@ -103,10 +104,26 @@ struct ScenarioFrame {
          body_head_mm = std::numeric_limits<double>::quiet_NaN(),
          body_elbow_mm = std::numeric_limits<double>::quiet_NaN(),
          body_shoulder_mm = std::numeric_limits<double>::quiet_NaN();
+  // Arm angle errors (armAngleErrors, degrees), mean of both sides scored.
+  double body_upper_arm_deg = std::numeric_limits<double>::quiet_NaN(),
+         body_forearm_deg = std::numeric_limits<double>::quiet_NaN(),
+         body_elbow_flex_deg = std::numeric_limits<double>::quiet_NaN();
   double papf_ms = 0;
 };
 
 // The PAPF's figures over one scenario (see the header comment for what is scored).
+// The joint-angle errors of one arm (degrees), from joint positions, so that any body model's
+// parametrisation compares with the simulated person's: the upper arm's direction (shoulder ->
+// elbow) and the forearm's (elbow -> wrist) against the truth's, and the elbow flexion (the
+// angle between those two bones, 0 = straight) against the truth's. NaN where a joint of the
+// truth is not finite or a bone has no length.
+struct ArmAngleErrors {
+  double upper_arm_deg, forearm_deg, elbow_flex_deg;
+};
+ArmAngleErrors armAngleErrors(const Eigen::Vector3d& shoulder, const Eigen::Vector3d& elbow,
+                              const Eigen::Vector3d& wrist, const Eigen::Vector3d& true_shoulder,
+                              const Eigen::Vector3d& true_elbow, const Eigen::Vector3d& true_wrist);
+
 struct BodyTrackingFigures {
   bool ran = false;          // ScenarioEvalOptions::body was on
   int person_frames = 0;     // scored frames with the person present
@@ -116,15 +133,17 @@ struct BodyTrackingFigures {
   int empty_tracked_frames = 0;  // empty-scene frames with a pose reported (false starts)
   // Per-sample errors (mm): hands and joints both sides pooled.
   tabletop_common::RunningStats hand_mm, head_mm, elbow_mm, shoulder_mm;
+  // Per-sample arm angle errors (degrees, armAngleErrors), both sides pooled.
+  tabletop_common::RunningStats upper_arm_deg, forearm_deg, elbow_flex_deg;
   tabletop_common::RunningStats papf_ms;  // per update, all scored frames
 
   // Person frames without a pose reported (the track not started yet, or lost).
   int untrackedFrames() const { return person_frames - tracked_frames; }
   int restarts() const { return starts > 0 ? starts - 1 : 0; }
   double trackedFraction() const;  // NaN without person frames
-  // Mean error of one of hand_mm, head_mm, ...: NaN when not run or no person frame; +inf when
+  // Mean error of one of hand_mm, head_mm, ..., upper_arm_deg, ...: NaN when not run or no person frame; +inf when
   // the person was there for a second or more and nothing was ever scored (never tracked).
-  double meanMm(const tabletop_common::RunningStats& s) const;
+  double meanError(const tabletop_common::RunningStats& s) const;
 };
 
 struct ScenarioEvalResult {

@@ -42,11 +42,13 @@ struct ScenarioFigures {
   double psfs_ms = kNaN, mpf_ms = kNaN, wall_s = kNaN;
   // The upper-body PAPF (scenario_evaluation.h; all NaN when it did not run, --no-body): mean
   // errors over its tracked person frames (hands vs palm + fingers, head centre, elbows,
-  // shoulders; both sides pooled), tracked fraction of the person frames, person frames without
+  // shoulders; both sides pooled), mean arm angle errors (upper-arm and forearm directions,
+  // elbow flexion, degrees), tracked fraction of the person frames, person frames without
   // a pose, starts (the first included), restarts (starts - 1), losses (tracked -> not tracked
   // with the person there), empty-scene frames with a pose, ms per update.
   double body_hand_mm = kNaN, body_head_mm = kNaN, body_elbow_mm = kNaN, body_shoulder_mm = kNaN;
   double body_hand_max_mm = kNaN, body_head_max_mm = kNaN;
+  double body_upper_arm_deg = kNaN, body_forearm_deg = kNaN, body_elbow_flex_deg = kNaN;
   double body_tracked_fraction = kNaN, body_untracked_frames = kNaN, body_starts = kNaN,
          body_restarts = kNaN, body_losses = kNaN, body_false_frames_empty = kNaN;
   double papf_ms = kNaN;
