@@ -26,8 +26,10 @@ int partsPerParticle(int partition) {
 
 // Module 1 of figure 6.4, on the host: each particle's scored parts and its collision flag,
 // written at fixed places (particle-major), so the thread count does not change the result.
-void buildBatch(const BodyProfile& profile, const std::vector<BodyState>& particles, int partition,
-                int threads, PartQuadric* parts, uint8_t* collides) {
+// The trunk parts carry their shell as VolumeObservation::partScore builds it.
+void buildBatch(const BodyProfile& profile, const ObservationParams& op,
+                const std::vector<BodyState>& particles, int partition, int threads,
+                PartQuadric* parts, uint8_t* collides) {
   Part scored[kNumParts];
   const int k = scoredParts(partition, scored);
   const int n = static_cast<int>(particles.size());
@@ -37,7 +39,9 @@ void buildBatch(const BodyProfile& profile, const std::vector<BodyState>& partic
     collides[i] = buildScoredParts(profile, particles[i], partition, &bp) ? 1 : 0;
     for (int j = 0; j < k; ++j) {
       const Part p = scored[j];
-      parts[static_cast<size_t>(i) * k + j] = plainPart(bp[static_cast<int>(p)], isSkinPart(p), isTrunkPart(p));
+      parts[static_cast<size_t>(i) * k + j] =
+          plainPart(bp[static_cast<int>(p)], isSkinPart(p), isTrunkPart(p), op.trunk_shell_width,
+                    isTrunkPart(p) ? op.trunk_shell_weight : 0.0);
     }
   }
 }
@@ -48,6 +52,7 @@ struct GpuParticleWeights::Impl {
   std::unique_ptr<gpu::ParticleWeightsDevice> device;
   std::string reason;
   bool have_observation = false;
+  ObservationParams observation;  // of the last setObservation: the trunk shells
   GpuWeightTimes times;
 
   void requireUsable() const {
@@ -86,6 +91,7 @@ void GpuParticleWeights::setObservation(const VolumeObservation& obs) {
   const VolumeObservation::RowSums& body = obs.rowSums(false);
   impl_->device->uploadRowSums(rowSumsView(body), rowSumsView(obs.rowSums(true)), body.s0.size(),
                                plainGrid(obs.grid(), obs.params().unknown_likelihood));
+  impl_->observation = obs.params();
   impl_->have_observation = true;
 }
 
@@ -97,7 +103,8 @@ void GpuParticleWeights::score(const BodyProfile& profile, const std::vector<Bod
   gpu::ParticleWeightsDevice& dev = *impl_->device;
   const auto t0 = std::chrono::steady_clock::now();
   dev.reserve(n, k);
-  buildBatch(profile, particles, partition, threads, dev.stagedParts(), dev.stagedCollides());
+  buildBatch(profile, impl_->observation, particles, partition, threads, dev.stagedParts(),
+             dev.stagedCollides());
   const auto t1 = std::chrono::steady_clock::now();
   const double* out = dev.score(n, k);
   scores->assign(out, out + n);
@@ -113,7 +120,7 @@ void emulateGpuParticleWeights(const VolumeObservation& obs, const BodyProfile& 
   const int items = n * k;
   std::vector<PartQuadric> parts(items);
   std::vector<uint8_t> collides(n);
-  buildBatch(profile, particles, partition, threads, parts.data(), collides.data());
+  buildBatch(profile, obs.params(), particles, partition, threads, parts.data(), collides.data());
   const part_score::ObservationGrid g = plainGrid(obs.grid(), obs.params().unknown_likelihood);
   const part_score::RowSumsView body = rowSumsView(obs.rowSums(false));
   const part_score::RowSumsView blended = rowSumsView(obs.rowSums(true));
@@ -128,13 +135,13 @@ void emulateGpuParticleWeights(const VolumeObservation& obs, const BodyProfile& 
     const part_score::RowSumsView& sums = q.skin ? blended : body;
     const int rows = part_score::rowCount(s);
     part_score::RowTerms terms[gpu::kRowThreads];
-    part_score::PartSums acc = {0.0, 0.0};
+    part_score::PartSums acc = {0.0, 0.0, 0.0, 0.0};
     for (int first = 0; first < rows; first += gpu::kRowThreads) {
       const int m = std::min(gpu::kRowThreads, rows - first);
       for (int t = 0; t < m; ++t) terms[t] = part_score::rowTermsAt(s, q, g, sums, first + t);
       for (int j = 0; j < m; ++j) part_score::accumulateRow(terms[j], &acc);
     }
-    part_scores[item] = part_score::finishPart(acc, g.unknown);
+    part_scores[item] = part_score::finishPart(acc, g.unknown, q.shell_weight);
   }
   // particleScoresKernel: a thread per particle.
   scores->resize(n);

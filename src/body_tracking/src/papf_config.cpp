@@ -24,6 +24,8 @@ void addPapfKeys(PapfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("observation/downsample", &p.observation.downsample)
       .add("observation/skin_weight", &p.observation.skin_weight)
       .add("observation/unknown_likelihood", &p.observation.unknown_likelihood)
+      .add("observation/trunk_shell_width", &p.observation.trunk_shell_width)
+      .add("observation/trunk_shell_weight", &p.observation.trunk_shell_weight)
       .add("hands/enabled", &p.hands.enabled)
       .add("hands/radius", &p.hands.radius)
       .add("hands/wrist_offset", &p.hands.wrist_offset)

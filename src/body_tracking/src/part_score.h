@@ -5,7 +5,8 @@
 //   rowTerms     one voxel row's weight and likelihood terms (GPU: one thread per row);
 //   accumulateRow  adds a row's terms to the part's sums, rows in order (GPU: one thread per
 //                part walks its rows' terms in order, so the sums round exactly as on the CPU);
-//   finishPart   the part's weighted mean; particleScore the particle's sum over its parts.
+//   finishPart   the part's weighted mean, less its shell's contrast term (trunk parts, below);
+//                particleScore the particle's sum over its parts.
 // The expressions keep the operation order of the Eigen code they replaced (Vector4d::dot in
 // SSE2 pairs, Matrix4d * Vector4d column by column), so the scores are the same bytes as before.
 // Build with no FMA contraction on either side (--fmad=false, -ffp-contract=off).
@@ -35,10 +36,19 @@ struct RowSumsView {
 };
 
 // A TruncatedQuadric as the score reads it.
+// The shell (trunk parts, ObservationParams::trunk_shell_weight > 0): shell_Q is the part grown
+// sideways (same clipping planes), and the score is the part's weighted mean less shell_weight
+// times the plain mean likelihood of the grid voxels between the two. The part's mean alone
+// cannot tell a trunk that fills the person's trunk from one sunk inside the larger blob of
+// trunk, arms and halo (any pose inside scores ~0.9); the shell is empty only on the real
+// boundary. Without a shell, shell_weight is 0 and lo / hi are the part's own bounds; with
+// one, the grown part's.
 struct PartQuadric {
   double Q[16];         // column-major (Eigen's layout): Q(i, k) = Q[4 k + i]
+  double shell_Q[16];   // the grown part (same layout); unused when shell_weight is 0
   double planes[2][4];  // inside where planes[i] . v >= 0
   double lo[3], hi[3];  // axis-aligned bounds (world)
+  double shell_weight;
   int num_planes;
   int skin;             // reads the blended (skin-weighted) likelihood
   int extrapolate;      // trunk: rows outside the grid read the nearest grid row
@@ -52,20 +62,24 @@ struct PartSetup {
   int y0, y1, z0, z1;
   double C;
   double base[4], q_base[4], q_dy[4], q_dz[4];
+  double shell_C, shell_q_base[4], shell_q_dy[4], shell_q_dz[4];  // the same for shell_Q
 };
 
 // One row's contribution: `w` to the weight sum, then to the weighted likelihood sum, in this
 // order, those of its terms present in `mask` (bit k: terms[k]): the grid's voxels (or the
 // unknown value for the whole row), the lattice left of the grid, right of it. mask < 0: the
 // row misses the part. Fixed slots, no running index: the GPU keeps them in registers.
+// shell_sum / shell_count: the row's grid voxels in the shell (likelihood sum, number).
 struct RowTerms {
   double w;
   double terms[3];
+  double shell_sum, shell_count;
   int mask;
 };
 
 struct PartSums {
   double sw, swy;
+  double shell_sum, shell_count;
 };
 
 BT_HD double dmax(double a, double b) { return a < b ? b : a; }  // std::max's NaN behaviour
@@ -132,6 +146,12 @@ BT_HD PartSetup setupPart(const PartQuadric& q, const ObservationGrid& g) {
     s.q_dy[i] = h * q.Q[4 + i];
     s.q_dz[i] = h * q.Q[8 + i];
   }
+  s.shell_C = h * h * q.shell_Q[0];
+  matVec4(q.shell_Q, s.base, s.shell_q_base);
+  for (int i = 0; i < 4; ++i) {
+    s.shell_q_dy[i] = h * q.shell_Q[4 + i];
+    s.shell_q_dz[i] = h * q.shell_Q[8 + i];
+  }
   return s;
 }
 
@@ -140,11 +160,40 @@ BT_HD double rowWeights(double A, double B, double C, long lo, long hi) {
   return (1.0 + A) * sumPow0(lo, hi) + B * sumPow1(lo, hi) + C * sumPow2(lo, hi);
 }
 
+// The row's voxels x in [*xlo, *xhi] (bx0..bx1 to start) inside the quadric, whose
+// v^T Q v = A + B x + C x^2 along the row, and inside the clipping planes. False when none.
+BT_HD bool rowInterval(double A, double B, double C, const PartQuadric& q, const double* v0,
+                       double h, double* xlo, double* xhi) {
+  if (C > 1e-15) {
+    const double disc = B * B - 4.0 * A * C;
+    if (disc < 0) return false;
+    const double sq = sqrt(disc);
+    *xlo = dmax(*xlo, ceil((-B - sq) / (2.0 * C) - 1e-9));
+    *xhi = dmin(*xhi, floor((-B + sq) / (2.0 * C) + 1e-9));
+  } else {
+    clipLinear(-A, -B, xlo, xhi);  // A + B x <= 0
+  }
+  for (int i = 0; i < q.num_planes; ++i)
+    clipLinear(dot4(q.planes[i], v0), q.planes[i][0] * h, xlo, xhi);
+  return *xlo <= *xhi;
+}
+
+// Sum and number of row r's grid voxels lo..hi (clipped to the grid) into *sum, *count.
+BT_HD void gridRowSum(const RowSumsView& sums, long r, int nx, long lo, long hi, double sign,
+                      double* sum, double* count) {
+  const long a = lmax(lo, 0), b = lmin(hi, nx - 1);
+  if (a > b) return;
+  *sum += sign * (sums.s0[r + b + 1] - sums.s0[r + a]);
+  *count += sign * static_cast<double>(b - a + 1);
+}
+
 // Row (yy, z) of the part's lattice.
 BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g,
                         const RowSumsView& sums, int yy, int z) {
   RowTerms t;
   t.mask = -1;
+  t.shell_sum = 0.0;
+  t.shell_count = 0.0;
   const double h = g.voxel_size;
   const double C = s.C;
   double v0[4], qv[4];
@@ -152,27 +201,29 @@ BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const Observat
   v0[1] = s.base[1] + yy * h;
   v0[2] = s.base[2] + z * h;
   v0[3] = s.base[3] + 0.0;
+  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const bool row_in_grid = yy >= 0 && yy < ny && z >= 0 && z < nz;
+  // The shell: the grown part's grid voxels in this row, less the part's (below). Rows outside
+  // the grid give none (the trunk's clamped rows would repeat the face's).
+  if (q.shell_weight > 0 && row_in_grid) {
+    double sv[4];
+    for (int i = 0; i < 4; ++i) sv[i] = s.shell_q_base[i] + yy * s.shell_q_dy[i] + z * s.shell_q_dz[i];
+    double olo = s.bx0, ohi = s.bx1;
+    if (rowInterval(dot4(v0, sv), 2.0 * h * sv[0], s.shell_C, q, v0, h, &olo, &ohi))
+      gridRowSum(sums, static_cast<long>(yy + ny * z) * (nx + 1), nx, static_cast<long>(olo),
+                 static_cast<long>(ohi), 1.0, &t.shell_sum, &t.shell_count);
+  }
   for (int i = 0; i < 4; ++i) qv[i] = s.q_base[i] + yy * s.q_dy[i] + z * s.q_dz[i];
   const double A = dot4(v0, qv), B = 2.0 * h * qv[0];
   double xlo = s.bx0, xhi = s.bx1;
-  if (C > 1e-15) {
-    const double disc = B * B - 4.0 * A * C;
-    if (disc < 0) return t;
-    const double sq = sqrt(disc);
-    xlo = dmax(xlo, ceil((-B - sq) / (2.0 * C) - 1e-9));
-    xhi = dmin(xhi, floor((-B + sq) / (2.0 * C) + 1e-9));
-  } else {
-    clipLinear(-A, -B, &xlo, &xhi);  // A + B x <= 0
-  }
-  for (int i = 0; i < q.num_planes; ++i)
-    clipLinear(dot4(q.planes[i], v0), q.planes[i][0] * h, &xlo, &xhi);
-  if (xlo > xhi) return t;
+  if (!rowInterval(A, B, C, q, v0, h, &xlo, &xhi)) return t;
   const long a = static_cast<long>(xlo), b = static_cast<long>(xhi);
+  if (q.shell_weight > 0 && row_in_grid)
+    gridRowSum(sums, static_cast<long>(yy + ny * z) * (nx + 1), nx, a, b, -1.0, &t.shell_sum,
+               &t.shell_count);
   const double w_all = rowWeights(A, B, C, a, b);
   t.w = w_all;
   t.mask = 0;
-  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-  const bool row_in_grid = yy >= 0 && yy < ny && z >= 0 && z < nz;
   if (!row_in_grid && !q.extrapolate) {
     t.terms[0] = g.unknown * w_all;
     t.mask = 1;
@@ -214,6 +265,8 @@ BT_HD RowTerms rowTermsAt(const PartSetup& s, const PartQuadric& q, const Observ
 }
 
 BT_HD void accumulateRow(const RowTerms& t, PartSums* acc) {
+  acc->shell_sum += t.shell_sum;
+  acc->shell_count += t.shell_count;
   if (t.mask < 0) return;
   acc->sw += t.w;
   if (t.mask & 1) acc->swy += t.terms[0];
@@ -221,18 +274,21 @@ BT_HD void accumulateRow(const RowTerms& t, PartSums* acc) {
   if (t.mask & 4) acc->swy += t.terms[2];
 }
 
-// A part thinner than the lattice may catch no voxel centre: its evidence is unknown.
-BT_HD double finishPart(const PartSums& acc, double unknown) {
-  return acc.sw > 1e-12 ? acc.swy / acc.sw : unknown;
+// A part thinner than the lattice may catch no voxel centre: its evidence is unknown. A shell
+// with no grid voxel takes nothing off.
+BT_HD double finishPart(const PartSums& acc, double unknown, double shell_weight) {
+  const double mean = acc.sw > 1e-12 ? acc.swy / acc.sw : unknown;
+  if (shell_weight > 0 && acc.shell_count > 0.5) return mean - shell_weight * (acc.shell_sum / acc.shell_count);
+  return mean;
 }
 
 // The whole part on one thread: the CPU path (VolumeObservation::partScore).
 BT_HD double scorePart(const PartQuadric& q, const ObservationGrid& g, const RowSumsView& sums) {
   const PartSetup s = setupPart(q, g);
-  PartSums acc = {0.0, 0.0};
+  PartSums acc = {0.0, 0.0, 0.0, 0.0};
   for (int z = s.z0; z <= s.z1; ++z)
     for (int yy = s.y0; yy <= s.y1; ++yy) accumulateRow(rowTerms(s, q, g, sums, yy, z), &acc);
-  return finishPart(acc, g.unknown);
+  return finishPart(acc, g.unknown, q.shell_weight);
 }
 
 // A particle's score: its parts' scores summed in order, 0 for a self-colliding pose

@@ -7,14 +7,28 @@
 
 namespace body_tracking {
 
-inline part_score::PartQuadric plainPart(const TruncatedQuadric& t, bool skin_part, bool extrapolate) {
+// shell_weight > 0 (a cylinder only): the part with its shell, the cylinder grown sideways by
+// shell_width (part_score.h, ObservationParams::trunk_shell_*).
+inline part_score::PartQuadric plainPart(const TruncatedQuadric& t, bool skin_part, bool extrapolate,
+                                         double shell_width = 0.0, double shell_weight = 0.0) {
   part_score::PartQuadric q;
   for (int i = 0; i < 16; ++i) q.Q[i] = t.Q.data()[i];
+  const bool shell = shell_weight > 0 && t.shape == TruncatedQuadric::Shape::CYLINDER;
+  Eigen::AlignedBox3d bounds = t.bounds;
+  if (shell) {
+    const TruncatedQuadric grown =
+        TruncatedQuadric::cylinder(t.frame, t.length, t.semi.x() + shell_width, t.semi.z() + shell_width);
+    for (int i = 0; i < 16; ++i) q.shell_Q[i] = grown.Q.data()[i];
+    bounds = grown.bounds;
+  } else {
+    for (int i = 0; i < 16; ++i) q.shell_Q[i] = 0.0;
+  }
+  q.shell_weight = shell ? shell_weight : 0.0;
   for (int p = 0; p < 2; ++p)  // an ellipsoid's planes are unset: zeros
     for (int i = 0; i < 4; ++i) q.planes[p][i] = p < t.num_planes ? t.planes[p][i] : 0.0;
   for (int i = 0; i < 3; ++i) {
-    q.lo[i] = t.bounds.min()[i];
-    q.hi[i] = t.bounds.max()[i];
+    q.lo[i] = bounds.min()[i];
+    q.hi[i] = bounds.max()[i];
   }
   q.num_planes = t.num_planes;
   q.skin = skin_part ? 1 : 0;

@@ -51,6 +51,10 @@ VolumeObservation::VolumeObservation(const ObservationParams& params) : params_(
     throw std::invalid_argument("observation skin_weight must be in [0, 1]");
   if (!(params_.unknown_likelihood >= 0 && params_.unknown_likelihood <= 1))
     throw std::invalid_argument("observation unknown_likelihood must be in [0, 1]");
+  if (!(params_.trunk_shell_width > 0 && params_.trunk_shell_width <= 0.2))
+    throw std::invalid_argument("observation trunk_shell_width must be in (0, 0.2] m");
+  if (!(params_.trunk_shell_weight >= 0 && params_.trunk_shell_weight <= 5))
+    throw std::invalid_argument("observation trunk_shell_weight must be in [0, 5]");
 
 }
 
@@ -104,7 +108,8 @@ void VolumeObservation::buildRowSums(const psfs::VoxelGrid& g, const std::vector
 double VolumeObservation::partScore(const TruncatedQuadric& part, bool skin_part,
                                      bool extrapolate) const {
   // part_score.h: the same arithmetic as the GPU particle weights.
-  return part_score::scorePart(plainPart(part, skin_part, extrapolate),
+  return part_score::scorePart(plainPart(part, skin_part, extrapolate, params_.trunk_shell_width,
+                                         extrapolate ? params_.trunk_shell_weight : 0.0),
                                plainGrid(grid_, params_.unknown_likelihood),
                                rowSumsView(rowSums(skin_part)));
 }

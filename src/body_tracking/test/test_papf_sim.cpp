@@ -79,15 +79,18 @@ struct Stats {
 
 // Bars: the are 16 mm (hands), 15 mm (head) and 25 mm (elbows); the thesis measured
 // 32.1 mm for the hands on real data. What the defaults measure on this sequence, seeds 1-5:
-// hands 78.9 / 19.7 / 53.9 / 21.5 / 19.6 mm (median 21.5), head 13.0, elbows 37.2, shoulders
-// 31.6 mm (medians). Seeds 1 and 3 lose the right arm for a few seconds; before the hands were
-// kept off the face (part_collision.cpp) the five read 19.0-25.5 mm, but the generated scenarios
-// got worse hands in 10 of 10 without it (docs/benchmarks.md). The hands and elbows miss the
-// issue's bars (a few frames of each fast reach lag behind, and the mean-likelihood observation
-// pulls the shoulders ~2 cm into the trunk). The bars below guard the medians with ~30 % margin,
-// because any change upstream moves every later particle (the fusion kernels give the same bytes
-// on every instruction set: TABLETOP_SIMD=avx2 prints the same medians).
-constexpr double kHandMeanBar = 0.028, kHeadMeanBar = 0.017, kElbowMeanBar = 0.048;
+// hands 19.1 / 18.4 / 19.2 / 18.3 / 16.1 mm (median 18.4), head 14.4, elbows 31.7, shoulders
+// 24.0 mm (medians). Before the trunk parts' shell (volume_observation.h) the trunk wandered
+// inside the blob of trunk, arms and halo (yaw 5 deg, bend 8 deg, 13 mm forward, median), the
+// shoulders were 3 cm off, seeds 1 and 3 lost the right arm for seconds (hands 78.9 and 53.9
+// mm) and the median read hands 21.5, head 13.0, elbows 37.2, shoulders 31.6 mm. With the true
+// trunk given (a scratch switch) the same search reads hands 14.9, elbows 23.9 mm: what is left
+// is the trunk's own error. The median's bars guard with ~30 % margin, because any change
+// upstream moves every later particle (the fusion kernels give the same bytes on every
+// instruction set: TABLETOP_SIMD=avx2 prints the same medians); every seed must stay below
+// kHandSeedBar, which an arm lost for a few seconds breaks (those runs read 50-80 mm).
+constexpr double kHandMeanBar = 0.024, kHeadMeanBar = 0.019, kElbowMeanBar = 0.041;
+constexpr double kHandSeedBar = 0.035;
 
 bool sameState(const BodyState& a, const BodyState& b) {
   for (int i = 0; i < dof::COUNT; ++i)
@@ -98,7 +101,7 @@ bool sameState(const BodyState& a, const BodyState& b) {
 TEST(PapfSim, ReachTargetsShortSleevesAccuracyAndDeterminism) {
   // Five seeds on the same volumes: one seed's run is one draw of a chaotic search (a change
   // anywhere moves every later particle; a run that loses an arm for a few seconds reads 50-80
-  // mm), so the bars judge the median run.
+  // mm), so the accuracy bars judge the median run and every run only for a lost arm.
   constexpr int kSeeds = 5;
   std::vector<std::unique_ptr<Papf>> papfs;
   for (int k = 0; k < kSeeds; ++k) {
@@ -147,6 +150,7 @@ TEST(PapfSim, ReachTargetsShortSleevesAccuracyAndDeterminism) {
     head_means.push_back(head[k].mean());
     elbow_means.push_back(elbows[k].mean());
     EXPECT_EQ(tracked[k], person_frames) << "seed " << 1 + k << ": the track was lost";
+    EXPECT_LT(hands[k].mean(), kHandSeedBar) << "seed " << 1 + k << ": an arm was lost for a while";
     EXPECT_EQ(starts[k], 1) << "seed " << 1 + k;
   }
   const auto median = [](std::vector<double> v) {

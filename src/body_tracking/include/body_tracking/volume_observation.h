@@ -27,6 +27,14 @@ struct ObservationParams {
   int downsample = 2;
   double skin_weight = 0.5;         // head and hands: (1 - k) body + k skin
   double unknown_likelihood = 0.3;  // head and limb voxels outside the grid
+  // The trunk parts' shell (part_score.h): each trunk cylinder's score is less
+  // trunk_shell_weight times the mean likelihood between it and the cylinder grown sideways by
+  // trunk_shell_width (m). The mean inside alone is ~0.9 for any trunk sunk in the blob of
+  // trunk, arms and halo, and the trunk wandered in it (test_papf_sim: yaw 5 deg, bend 8 deg,
+  // 13 mm forward, which put the shoulders 3 cm off and the arms with them); an empty shell
+  // holds it to the real boundary. 0 = the thesis' observation.
+  double trunk_shell_width = 0.03;
+  double trunk_shell_weight = 0.5;
 };
 
 class VolumeObservation {
@@ -42,8 +50,8 @@ class VolumeObservation {
   bool ready() const { return !body_.empty(); }
   const psfs::VoxelGrid& grid() const { return grid_; }
 
-  // Sum over parts of the weighted mean likelihood, in [0, kNumParts]. per_part (optional)
-  // receives each part's mean.
+  // Sum over parts of the weighted mean likelihood (the trunk parts less their shell's term), in
+  // [-2 trunk_shell_weight, kNumParts]. per_part (optional) receives each part's score.
   double score(const BodyParts& parts, std::array<double, kNumParts>* per_part = nullptr) const;
   double partScore(const TruncatedQuadric& part, bool skin_part, bool extrapolate) const;
 

@@ -51,7 +51,7 @@ __global__ void partScoresKernel(const PartQuadric* parts, const uint8_t* collid
   const PartSetup s = part_score::setupPart(q, g);
   const RowSumsView sums = q.skin ? blended : body;
   const int rows = part_score::rowCount(s);
-  PartSums acc = {0.0, 0.0};
+  PartSums acc = {0.0, 0.0, 0.0, 0.0};
   for (int first = 0; first < rows; first += kRowThreads) {
     const int k = first + static_cast<int>(threadIdx.x);
     if (k < rows) terms[threadIdx.x] = part_score::rowTermsAt(s, q, g, sums, k);
@@ -62,7 +62,7 @@ __global__ void partScoresKernel(const PartQuadric* parts, const uint8_t* collid
     }
     __syncthreads();
   }
-  if (threadIdx.x == 0) part_scores[item] = part_score::finishPart(acc, g.unknown);
+  if (threadIdx.x == 0) part_scores[item] = part_score::finishPart(acc, g.unknown, q.shell_weight);
 }
 
 __global__ void particleScoresKernel(const double* part_scores, const uint8_t* collides,
