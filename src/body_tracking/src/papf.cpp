@@ -37,7 +37,12 @@ double survivalRate(const std::vector<double>& x, double beta) {
 }  // namespace
 
 Papf::Papf(const BodyProfile& profile, const PapfParams& params)
-    : profile_(profile), params_(params), observation_(params.observation), rng_(params.seed) {
+    : base_profile_(profile),
+      profile_(profile),
+      params_(params),
+      girth_(params.shape),
+      observation_(params.observation),
+      rng_(params.seed) {
   profile_.validate();
   params_.validate();
   beta_.fill(1.0);
@@ -59,6 +64,8 @@ void Papf::reset() {
   weights_.clear();
   bad_frames_ = 0;
   beta_.fill(1.0);
+  girth_.reset();
+  profile_ = base_profile_;
 }
 
 static_assert(Papf::kPartitions == kPapfPartitions, "scored_parts.h lists the partitions");
@@ -409,6 +416,8 @@ void Papf::startAt(const BodyState& state) {
   estimate_.state = state;
   velocity_.setZero();
   bad_frames_ = 0;
+  girth_.reset();
+  profile_ = base_profile_;
 }
 
 const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
@@ -438,6 +447,12 @@ const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
     anneal(true);
     velocity_ = toTangent(previous_state_, estimate_.state);
   }
+  if (estimate_.tracking && girth_.refining()) {
+    // This frame's pose, tracked with the girth so far, votes; the next frame uses the best.
+    girth_.add(observation_, base_profile_, estimate_.state);
+    profile_ = TrunkGirth::scaled(base_profile_, girth_.factor());
+  }
+  estimate_.trunk_girth = girth_.factor();
   if (estimate_.tracking) {
     if (skin) {
       estimate_.hands = refineHands(*skin, estimate_.frames, params_.hands);

@@ -29,6 +29,7 @@
 #include "body_tracking/joint_limits.h"
 #include "body_tracking/papf_params.h"
 #include "body_tracking/state_tangent.h"
+#include "body_tracking/trunk_girth.h"
 #include "body_tracking/volume_observation.h"
 
 namespace body_tracking {
@@ -42,7 +43,8 @@ struct BodyEstimate {
   // or the model's own where no skin volume was given or too little skin was found.
   RefinedHands hands;
   std::array<double, kNumParts> part_scores{};  // the estimate's mean likelihood per part
-  double score = 0;          // mean over parts, 0..1
+  double score = 0;          // mean over parts, at most 1 (the trunk's shells take off)
+  double trunk_girth = 1.0;  // the trunk's girth factor in use (trunk_girth.h)
   int frames_tracked = 0;
   // Solved exponents (diagnostics), per partition (trunk, left, right), layer L first.
   std::array<double, 24> layer_beta{};
@@ -65,6 +67,8 @@ class Papf {
   void startAt(const BodyState& state);
 
   const BodyEstimate& estimate() const { return estimate_; }
+  // The profile in use: the given one, its trunk's girth refined over a track's first frames
+  // (trunk_girth.h; PapfParams::shape).
   const BodyProfile& profile() const { return profile_; }
   const PapfParams& params() const { return params_; }
   const BodyLimits& limits() const { return limits_; }
@@ -98,8 +102,9 @@ class Papf {
   void collectSkinTargets(const Eigen::Vector3d* head);
   bool proposeArm(Side side, BodyState* s, std::uniform_real_distribution<double>* uni);
 
-  BodyProfile profile_;
+  BodyProfile base_profile_, profile_;
   PapfParams params_;
+  TrunkGirth girth_;
   BodyLimits limits_;
   VolumeObservation observation_;
   std::mt19937_64 rng_;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "body_tracking/hand_refinement.h"
+#include "body_tracking/trunk_girth.h"
 #include "body_tracking/volume_observation.h"
 
 namespace body_tracking {
@@ -37,6 +38,7 @@ struct PapfParams {
   double proposal_head_clearance = 0.15;  // m: skin this close to the head is not a hand
   ObservationParams observation;
   HandRefinementParams hands;
+  TrunkGirthParams shape;  // the trunk's girth refined over a track's first frames
   // Track start and loss.
   int min_person_voxels = 60;   // occupied voxels (working resolution) that make a person
   int init_runs = 6;            // annealing runs on the first volume of a new track
