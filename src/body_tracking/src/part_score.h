@@ -38,7 +38,8 @@ struct RowSumsView {
 // A TruncatedQuadric as the score reads it.
 // The shell (trunk parts, ObservationParams::trunk_shell_weight > 0): shell_Q is the part grown
 // sideways (same clipping planes), and the score is the part's weighted mean less shell_weight
-// times the plain mean likelihood of the grid voxels between the two. The part's mean alone
+// times the plain mean likelihood of the voxels between the two (within the grid's x range; rows
+// outside the grid read the nearest grid row, like the trunk's own). The part's mean alone
 // cannot tell a trunk that fills the person's trunk from one sunk inside the larger blob of
 // trunk, arms and halo (any pose inside scores ~0.9); the shell is empty only on the real
 // boundary. Without a shell, shell_weight is 0 and lo / hi are the part's own bounds; with
@@ -69,7 +70,7 @@ struct PartSetup {
 // order, those of its terms present in `mask` (bit k: terms[k]): the grid's voxels (or the
 // unknown value for the whole row), the lattice left of the grid, right of it. mask < 0: the
 // row misses the part. Fixed slots, no running index: the GPU keeps them in registers.
-// shell_sum / shell_count: the row's grid voxels in the shell (likelihood sum, number).
+// shell_sum / shell_count: the row's voxels in the shell (likelihood sum, number).
 struct RowTerms {
   double w;
   double terms[3];
@@ -203,24 +204,28 @@ BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const Observat
   v0[3] = s.base[3] + 0.0;
   const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const bool row_in_grid = yy >= 0 && yy < ny && z >= 0 && z < nz;
-  // The shell: the grown part's grid voxels in this row, less the part's (below). Rows outside
-  // the grid give none (the trunk's clamped rows would repeat the face's).
-  if (q.shell_weight > 0 && row_in_grid) {
+  // The shell: the grown part's voxels in this row within the grid's x range, less the part's
+  // (below). Rows outside the grid read the nearest grid row, as the trunk's own voxels do
+  // (extrapolate): counted in the grid only, a trunk that sank below the desk plane or behind the
+  // back face hid its shell there and kept the clamped rows' full likelihood inside (generated
+  // wide people: the trunk 5-8 cm low, the head 50-86 mm off).
+  const long shell_row =
+      static_cast<long>(iclamp(yy, 0, ny - 1) + ny * iclamp(z, 0, nz - 1)) * (nx + 1);
+  const bool shell = q.shell_weight > 0 && (row_in_grid || q.extrapolate);
+  if (shell) {
     double sv[4];
     for (int i = 0; i < 4; ++i) sv[i] = s.shell_q_base[i] + yy * s.shell_q_dy[i] + z * s.shell_q_dz[i];
     double olo = s.bx0, ohi = s.bx1;
     if (rowInterval(dot4(v0, sv), 2.0 * h * sv[0], s.shell_C, q, v0, h, &olo, &ohi))
-      gridRowSum(sums, static_cast<long>(yy + ny * z) * (nx + 1), nx, static_cast<long>(olo),
-                 static_cast<long>(ohi), 1.0, &t.shell_sum, &t.shell_count);
+      gridRowSum(sums, shell_row, nx, static_cast<long>(olo), static_cast<long>(ohi), 1.0,
+                 &t.shell_sum, &t.shell_count);
   }
   for (int i = 0; i < 4; ++i) qv[i] = s.q_base[i] + yy * s.q_dy[i] + z * s.q_dz[i];
   const double A = dot4(v0, qv), B = 2.0 * h * qv[0];
   double xlo = s.bx0, xhi = s.bx1;
   if (!rowInterval(A, B, C, q, v0, h, &xlo, &xhi)) return t;
   const long a = static_cast<long>(xlo), b = static_cast<long>(xhi);
-  if (q.shell_weight > 0 && row_in_grid)
-    gridRowSum(sums, static_cast<long>(yy + ny * z) * (nx + 1), nx, a, b, -1.0, &t.shell_sum,
-               &t.shell_count);
+  if (shell) gridRowSum(sums, shell_row, nx, a, b, -1.0, &t.shell_sum, &t.shell_count);
   const double w_all = rowWeights(A, B, C, a, b);
   t.w = w_all;
   t.mask = 0;

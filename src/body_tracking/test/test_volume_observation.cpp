@@ -19,8 +19,9 @@ using Eigen::Vector3d;
 
 // The definition: weighted mean over the voxel centres inside the part, lattice extended past
 // the grid reading the nearest grid voxel (clamp to edge) or the unknown likelihood; for a
-// trunk cylinder (extrapolate) less shell_weight times the plain mean over the grid voxels
-// inside the cylinder grown sideways by shell_width and not inside the part.
+// trunk cylinder (extrapolate) less shell_weight times the plain mean over the voxels inside
+// the cylinder grown sideways by shell_width and not inside the part (x within the grid, rows
+// outside it clamped).
 double bruteForce(const psfs::VoxelGrid& g, const std::vector<float>& y, double unknown,
                   bool extrapolate, const TruncatedQuadric& part, double shell_width,
                   double shell_weight) {
@@ -43,14 +44,22 @@ double bruteForce(const psfs::VoxelGrid& g, const std::vector<float>& y, double 
       }
   const double mean = sw > 1e-12 ? swy / sw : unknown;
   if (!extrapolate || shell_weight <= 0 || part.shape != TruncatedQuadric::Shape::CYLINDER) return mean;
+  // The shell's lattice: the grown part's bounds, x within the grid, rows outside it reading
+  // the nearest grid row (as the trunk's own voxels do).
   const TruncatedQuadric grown = TruncatedQuadric::cylinder(
       part.frame, part.length, part.semi.x() + shell_width, part.semi.z() + shell_width);
+  const Vector3d glo = (grown.bounds.min() - g.origin) / h, ghi = (grown.bounds.max() - g.origin) / h;
   double sum = 0;
   int count = 0;
-  for (size_t i = 0; i < y.size(); ++i) {
-    const Vector3d c = g.centre(i);
-    if (grown.contains(c) && !part.contains(c)) sum += y[i], ++count;
-  }
+  for (int z = static_cast<int>(std::floor(glo.z())); z <= static_cast<int>(std::floor(ghi.z())); ++z)
+    for (int yy = static_cast<int>(std::floor(glo.y())); yy <= static_cast<int>(std::floor(ghi.y())); ++yy)
+      for (int x = std::max(0, static_cast<int>(std::floor(glo.x())));
+           x <= std::min(g.dims.x() - 1, static_cast<int>(std::floor(ghi.x()))); ++x) {
+        const Vector3d c = g.origin + h * Vector3d(x + 0.5, yy + 0.5, z + 0.5);
+        if (!grown.contains(c) || part.contains(c)) continue;
+        sum += y[g.index(x, std::clamp(yy, 0, g.dims.y() - 1), std::clamp(z, 0, g.dims.z() - 1))];
+        ++count;
+      }
   return count ? mean - shell_weight * sum / count : mean;
 }
 
