@@ -236,7 +236,8 @@ def main():
         Fault("room_server_restart", f"the room server killed and restarted {d:g} s later: the bridge "
                                      "rejoins (back-off), the pipeline never waits; recovery = rejoin "
                                      "after the restart",
-              restart_room_server, "returns", recovered="rejoin", reports="cannot join room"),
+              restart_room_server, "returns", recovered="rejoin",
+              reports=("cannot join room", "lost room")),
         Fault("nodelet_reload", f"the MPF tracker nodelet unloaded and loaded again {d:g} s later: "
                                 "pSfS goes on, tracking starts over",
               lambda: reload_nodelet("mpf", "hand_tracking/Mpf"), "returns"),
@@ -286,8 +287,9 @@ def main():
         problems = []
         if recovered is None:
             problems.append(f"no recovery within {a.max_recovery:g} s")
-        if fault.reports and not watch.any_log(f0, end, fault.reports):
-            problems.append(f"no WARN/ERROR containing '{fault.reports}'")
+        texts = fault.reports if isinstance(fault.reports, tuple) else (fault.reports,)
+        if fault.reports and not any(watch.any_log(f0, end, t) for t in texts):
+            problems.append("no WARN/ERROR containing " + " or ".join(f"'{t}'" for t in texts))
         if fault.carries_on and lost > a.max_lost:
             problems.append(f"{lost} sets lost (at most {a.max_lost})")
         if fault.undo:

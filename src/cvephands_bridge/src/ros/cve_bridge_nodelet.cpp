@@ -137,6 +137,13 @@ class CveBridgeNodelet : public nodelet::Nodelet {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (client_ && client_->connected()) return;
+      if (client_ && !loss_reported_) {
+        // Joined before, gone now (the server stopped or the network dropped). Said once per
+        // loss: a rejoin that succeeds at its first attempt would otherwise leave no trace.
+        NODELET_WARN("cve_bridge: lost room '%s' at %s:%u; rejoining", options_.join.room.c_str(),
+                     options_.host.c_str(), options_.port);
+        loss_reported_ = true;
+      }
     }
     const ros::WallTime now = ros::WallTime::now();
     if (now + ros::WallDuration(0.05) < next_attempt_) return;  // backing off (timer slack)
@@ -160,6 +167,7 @@ class CveBridgeNodelet : public nodelet::Nodelet {
                  options_.join.room.c_str(), self.id, self.seat);
     std::lock_guard<std::mutex> lock(mutex_);
     client_ = client;
+    loss_reported_ = false;
     ++connects_;
     // A new connection: the receivers have no reference frames of ours.
     for (auto& e : encoders_) e.second.requestKeyFrame();
@@ -302,6 +310,7 @@ class CveBridgeNodelet : public nodelet::Nodelet {
   RoomClientOptions options_;
   HandStreamEncoderOptions encoder_options_;
   std::shared_ptr<RoomClient> client_;
+  bool loss_reported_ = false;  // the current client_'s loss has been warned about
   std::map<uint32_t, HandStreamEncoder> encoders_;
   HandFrame frame_;
   std::string fatal_, last_error_;
