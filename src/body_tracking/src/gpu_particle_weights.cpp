@@ -39,9 +39,7 @@ void buildBatch(const BodyProfile& profile, const ObservationParams& op,
     collides[i] = buildScoredParts(profile, particles[i], partition, &bp) ? 1 : 0;
     for (int j = 0; j < k; ++j) {
       const Part p = scored[j];
-      parts[static_cast<size_t>(i) * k + j] =
-          plainPart(bp[static_cast<int>(p)], isSkinPart(p), isTrunkPart(p), op.trunk_shell_width,
-                    isTrunkPart(p) ? op.trunk_shell_weight : 0.0);
+      parts[static_cast<size_t>(i) * k + j] = plainPart(bp[static_cast<int>(p)], isSkinPart(p), isTrunkPart(p), op);
     }
   }
 }

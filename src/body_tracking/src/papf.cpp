@@ -64,6 +64,10 @@ void Papf::reset() {
   weights_.clear();
   bad_frames_ = 0;
   beta_.fill(1.0);
+  restartShape();
+}
+
+void Papf::restartShape() {  // a new track, perhaps a new person: the profile as given
   girth_.reset();
   profile_ = base_profile_;
 }
@@ -416,8 +420,7 @@ void Papf::startAt(const BodyState& state) {
   estimate_.state = state;
   velocity_.setZero();
   bad_frames_ = 0;
-  girth_.reset();
-  profile_ = base_profile_;
+  restartShape();
 }
 
 const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,

@@ -7,13 +7,14 @@
 
 namespace body_tracking {
 
-// shell_weight > 0 (a cylinder only): the part with its shell, the cylinder grown sideways by
-// shell_width (part_score.h, ObservationParams::trunk_shell_*).
+// A trunk part (extrapolate, a cylinder) carries its shell when op.trunk_shell_weight > 0: the
+// cylinder grown sideways by op.trunk_shell_width (part_score.h).
 inline part_score::PartQuadric plainPart(const TruncatedQuadric& t, bool skin_part, bool extrapolate,
-                                         double shell_width = 0.0, double shell_weight = 0.0) {
+                                         const ObservationParams& op) {
   part_score::PartQuadric q;
   for (int i = 0; i < 16; ++i) q.Q[i] = t.Q.data()[i];
-  const bool shell = shell_weight > 0 && t.shape == TruncatedQuadric::Shape::CYLINDER;
+  const double shell_width = op.trunk_shell_width, shell_weight = op.trunk_shell_weight;
+  const bool shell = extrapolate && shell_weight > 0 && t.shape == TruncatedQuadric::Shape::CYLINDER;
   Eigen::AlignedBox3d bounds = t.bounds;
   if (shell) {
     const TruncatedQuadric grown =

@@ -42,9 +42,9 @@ BodyProfile TrunkGirth::scaled(const BodyProfile& base, double factor) {
 
 void TrunkGirth::add(const VolumeObservation& obs, const BodyProfile& base, const BodyState& state) {
   if (!refining()) return;
+  const BodyFrames f = forwardKinematics(base, state);  // the trunk's radii do not move a joint
   for (size_t k = 0; k < factors_.size(); ++k) {
     const BodyProfile p = scaled(base, factors_[k]);
-    const BodyFrames f = forwardKinematics(p, state);
     for (Part part : {Part::ABDOMEN, Part::CHEST})
       sums_[k] += obs.partScore(buildPart(p, f, part), false, true);
   }

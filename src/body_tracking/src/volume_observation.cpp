@@ -108,8 +108,7 @@ void VolumeObservation::buildRowSums(const psfs::VoxelGrid& g, const std::vector
 double VolumeObservation::partScore(const TruncatedQuadric& part, bool skin_part,
                                      bool extrapolate) const {
   // part_score.h: the same arithmetic as the GPU particle weights.
-  return part_score::scorePart(plainPart(part, skin_part, extrapolate, params_.trunk_shell_width,
-                                         extrapolate ? params_.trunk_shell_weight : 0.0),
+  return part_score::scorePart(plainPart(part, skin_part, extrapolate, params_),
                                plainGrid(grid_, params_.unknown_likelihood),
                                rowSumsView(rowSums(skin_part)));
 }

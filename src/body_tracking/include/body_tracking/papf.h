@@ -98,6 +98,7 @@ class Papf {
   void crossoverAndDiffuse(int partition);
   int drawIndex(double u) const;    // by the cumulative weights
   void finishEstimate();
+  void restartShape();
   // Hand candidates for the arm proposals: skin voxels, those near the head left out.
   void collectSkinTargets(const Eigen::Vector3d* head);
   bool proposeArm(Side side, BodyState* s, std::uniform_real_distribution<double>* uni);
