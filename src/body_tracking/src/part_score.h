@@ -2,7 +2,9 @@
 // for the CPU path and the GPU particle weights (issue 20, thesis figure 6.4). Plain structs and
 // pointers only, so g++ and nvcc compile the same functions:
 //   setupPart    the part's row-invariant quantities (its voxel rows, Q at the grid's base);
-//   rowTerms     one voxel row's weight and likelihood terms (GPU: one thread per row);
+//   rowTerms     one voxel row's weight and likelihood terms (GPU: one thread per row): its
+//                intervals (rowSpan; the CPU computes a SIMD vector of rows at once,
+//                part_spans.h), then the terms they give (rowTermsOf);
 //   accumulateRow  adds a row's terms to the part's sums, rows in order (GPU: one thread per
 //                part walks its rows' terms in order, so the sums round exactly as on the CPU);
 //   finishPart   the part's weighted mean, less its shell's contrast term (trunk parts, below);
@@ -188,20 +190,47 @@ BT_HD void gridRowSum(const RowSumsView& sums, long r, int nx, long lo, long hi,
   *count += sign * static_cast<double>(b - a + 1);
 }
 
-// Row (yy, z) of the part's lattice.
-BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g,
-                        const RowSumsView& sums, int yy, int z) {
-  RowTerms t;
-  t.mask = -1;
-  t.shell_sum = 0.0;
-  t.shell_count = 0.0;
+// A row's intervals (rowSpan): the part's voxels xlo..xhi (ok), those of its grown shell
+// olo..ohi (shell_ok; computed only when the part has a shell), and the part's A, B (rowInterval).
+// The CPU computes them for many rows at once (part_spans.h), the same bytes.
+struct RowSpan {
+  double A, B, xlo, xhi, olo, ohi;
+  int ok, shell_ok;
+};
+
+// Row (yy, z)'s intervals.
+BT_HD RowSpan rowSpan(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g, int yy, int z) {
+  RowSpan sp;
   const double h = g.voxel_size;
-  const double C = s.C;
   double v0[4], qv[4];
   v0[0] = s.base[0] + 0.0;
   v0[1] = s.base[1] + yy * h;
   v0[2] = s.base[2] + z * h;
   v0[3] = s.base[3] + 0.0;
+  sp.shell_ok = 0;
+  sp.olo = s.bx0;
+  sp.ohi = s.bx1;
+  if (q.shell_weight > 0) {
+    double sv[4];
+    for (int i = 0; i < 4; ++i) sv[i] = s.shell_q_base[i] + yy * s.shell_q_dy[i] + z * s.shell_q_dz[i];
+    sp.shell_ok = rowInterval(dot4(v0, sv), 2.0 * h * sv[0], s.shell_C, q, v0, h, &sp.olo, &sp.ohi);
+  }
+  for (int i = 0; i < 4; ++i) qv[i] = s.q_base[i] + yy * s.q_dy[i] + z * s.q_dz[i];
+  sp.A = dot4(v0, qv);
+  sp.B = 2.0 * h * qv[0];
+  sp.xlo = s.bx0;
+  sp.xhi = s.bx1;
+  sp.ok = rowInterval(sp.A, sp.B, s.C, q, v0, h, &sp.xlo, &sp.xhi);
+  return sp;
+}
+
+// Row (yy, z)'s terms, given its intervals.
+BT_HD RowTerms rowTermsOf(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g,
+                          const RowSumsView& sums, int yy, int z, const RowSpan& sp) {
+  RowTerms t;
+  t.mask = -1;
+  t.shell_sum = 0.0;
+  t.shell_count = 0.0;
   const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const bool row_in_grid = yy >= 0 && yy < ny && z >= 0 && z < nz;
   // The shell: the grown part's voxels in this row within the grid's x range, less the part's
@@ -212,19 +241,12 @@ BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const Observat
   const long shell_row =
       static_cast<long>(iclamp(yy, 0, ny - 1) + ny * iclamp(z, 0, nz - 1)) * (nx + 1);
   const bool shell = q.shell_weight > 0 && (row_in_grid || q.extrapolate);
-  if (shell) {
-    double sv[4];
-    for (int i = 0; i < 4; ++i) sv[i] = s.shell_q_base[i] + yy * s.shell_q_dy[i] + z * s.shell_q_dz[i];
-    double olo = s.bx0, ohi = s.bx1;
-    if (rowInterval(dot4(v0, sv), 2.0 * h * sv[0], s.shell_C, q, v0, h, &olo, &ohi))
-      gridRowSum(sums, shell_row, nx, static_cast<long>(olo), static_cast<long>(ohi), 1.0,
-                 &t.shell_sum, &t.shell_count);
-  }
-  for (int i = 0; i < 4; ++i) qv[i] = s.q_base[i] + yy * s.q_dy[i] + z * s.q_dz[i];
-  const double A = dot4(v0, qv), B = 2.0 * h * qv[0];
-  double xlo = s.bx0, xhi = s.bx1;
-  if (!rowInterval(A, B, C, q, v0, h, &xlo, &xhi)) return t;
-  const long a = static_cast<long>(xlo), b = static_cast<long>(xhi);
+  if (shell && sp.shell_ok)
+    gridRowSum(sums, shell_row, nx, static_cast<long>(sp.olo), static_cast<long>(sp.ohi), 1.0,
+               &t.shell_sum, &t.shell_count);
+  if (!sp.ok) return t;
+  const double A = sp.A, B = sp.B, C = s.C;
+  const long a = static_cast<long>(sp.xlo), b = static_cast<long>(sp.xhi);
   if (shell) gridRowSum(sums, shell_row, nx, a, b, -1.0, &t.shell_sum, &t.shell_count);
   const double w_all = rowWeights(A, B, C, a, b);
   t.w = w_all;
@@ -256,6 +278,12 @@ BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const Observat
     t.mask |= 4;
   }
   return t;
+}
+
+// Row (yy, z) of the part's lattice.
+BT_HD RowTerms rowTerms(const PartSetup& s, const PartQuadric& q, const ObservationGrid& g,
+                        const RowSumsView& sums, int yy, int z) {
+  return rowTermsOf(s, q, g, sums, yy, z, rowSpan(s, q, g, yy, z));
 }
 
 // Rows of the part's lattice; row k is (y0 + k % ny, z0 + k / ny), z outer as on the CPU.

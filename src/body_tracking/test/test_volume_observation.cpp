@@ -2,15 +2,19 @@
 // of each row) against a plain voxel-by-voxel loop, including parts that leave the grid and the
 // trunk parts' shells, the shape of the score on a volume drawn from a known pose (its maximum
 // at that pose), and what the shell is for: a trunk sunk in a larger blob scores below the one
-// on the blob's trunk boundary.
+// on the blob's trunk boundary. The CPU's rows a SIMD vector at a time (part_spans.h) give the
+// reference's bytes (part_score::scorePart, which the GPU runs) on every instruction set.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "body_tracking/body_parts.h"
 #include "body_tracking/volume_observation.h"
+#include "part_spans.h"
+#include "plain_part.h"
 
 namespace body_tracking {
 namespace {
@@ -104,6 +108,49 @@ TEST(VolumeObservation, RowSumsMatchTheVoxelLoop) {
     }
     EXPECT_EQ(compared, 300);
   }
+}
+
+TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
+  // Random parts across and beyond a random volume's faces: cylinders (with a shell when they
+  // extrapolate, and some along the x axis, where a row's quadric is linear in x), ellipsoids,
+  // thin parts that catch no voxel centre. Each compiled target's spans against rowSpan's.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  ObservationParams p;
+  p.unknown_likelihood = 0.3;
+  VolumeObservation obs(p);
+  const psfs::ProbabilityVolume body = randomVolume(&rng, {64, 64, 48}, 1.0 / 64);
+  obs.setVolumes(body, nullptr);
+  const part_score::ObservationGrid g = plainGrid(obs.grid(), p.unknown_likelihood);
+  const part_score::RowSumsView sums = rowSumsView(obs.rowSums(false));
+  const std::vector<part_spans::Target> targets = part_spans::availableTargets();
+  ASSERT_FALSE(targets.empty());
+  part_spans::SpanRows rows;
+  int rows_seen = 0;
+  for (int k = 0; k < 400; ++k) {
+    Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
+    if (k % 8 == 3)  // the axis along x: Q's x^2 coefficient is 0
+      f.linear() = Eigen::AngleAxisd(M_PI / 2, Vector3d::UnitY()).toRotationMatrix();
+    else
+      f.linear() = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+    f.translation() = Vector3d(0.65 * u(rng), 0.65 * u(rng), 0.375 + 0.52 * u(rng));
+    const double thin = k % 16 == 5 ? 0.1 : 1.0;
+    const TruncatedQuadric t = k % 2
+        ? TruncatedQuadric::cylinder(f, 0.3 + 0.1 * u(rng), thin * (0.05 + 0.03 * u(rng)), 0.04 + 0.02 * u(rng))
+        : TruncatedQuadric::ellipsoid(f, thin * (Vector3d(0.08, 0.1, 0.12) + 0.03 * Vector3d(u(rng), u(rng), u(rng))));
+    const part_score::PartQuadric q = plainPart(t, false, k % 4 < 2, p);
+    const double ref = part_score::scorePart(q, g, sums);
+    rows_seen += part_score::rowCount(part_score::setupPart(q, g));
+    for (const part_spans::Target& target : targets) {
+      const double got = part_spans::scorePart(q, g, sums, target.fn, &rows);
+      EXPECT_EQ(std::memcmp(&got, &ref, sizeof got), 0)
+          << target.name << ", part " << k << ": " << got << " against " << ref;
+    }
+  }
+  EXPECT_GT(rows_seen, 400 * 20) << "the parts should cover many rows";
+  std::printf("compared %d parts (%d rows) on %zu targets:", 400, rows_seen, targets.size());
+  for (const part_spans::Target& target : targets) std::printf(" %s", target.name);
+  std::printf("\n");
 }
 
 TEST(VolumeObservation, ScorePeaksAtThePoseTheVolumeWasDrawnFrom) {
