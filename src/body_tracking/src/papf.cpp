@@ -314,9 +314,15 @@ bool Papf::proposeArm(Side side, BodyState* s, std::uniform_real_distribution<do
 
 void Papf::anneal(bool from_previous) {
   if (from_previous) propagate();
+  if (params_.reseed_arms) seed_ = particles_;  // the arms' own spread (PapfParams::reseed_arms)
   const int layers = params_.layers;
   for (int k = 0; k < kPartitions; ++k) {
     if (k > 0) resampleUniform();
+    if (k > 0 && params_.reseed_arms) {
+      const PartitionSpec& ps = kPartitionSpecs[k];
+      for (size_t i = 0; i < particles_.size(); ++i)
+        for (int j = ps.first; j < ps.first + ps.count; ++j) particles_[i][j] = seed_[i][j];
+    }
     for (int l = layers - 1; l >= 0; --l) {
       const auto t0 = std::chrono::steady_clock::now();
       scoreAll(k);

@@ -11,6 +11,7 @@ void addPapfKeys(PapfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("survival_rate", &p.survival_rate)
       .add("weight_scale", &p.weight_scale)
       .add("diffusion", &p.diffusion)
+      .add("reseed_arms", &p.reseed_arms)
       .add("velocity_damping", &p.velocity_damping)
       .add("noise_translation", &p.noise_translation)
       .add("noise_torso_rotation", &p.noise_torso_rotation)

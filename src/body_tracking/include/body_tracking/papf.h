@@ -110,6 +110,7 @@ class Papf {
   VolumeObservation observation_;
   std::mt19937_64 rng_;
   std::vector<BodyState> particles_, scratch_;
+  std::vector<BodyState> seed_;  // the frame's propagated particles (reseed_arms)
   std::vector<double> scores_, weights_, cumulative_;
   std::array<double, 8 * kPartitions> beta_{};
   Tangent velocity_ = Tangent::Zero();  // the estimate's last step
