@@ -192,7 +192,7 @@ BT_HD void gridRowSum(const RowSumsView& sums, long r, int nx, long lo, long hi,
 
 // A row's intervals (rowSpan): the part's voxels xlo..xhi (ok), those of its grown shell
 // olo..ohi (shell_ok; computed only when the part has a shell), and the part's A, B (rowInterval).
-// The CPU computes them for many rows at once (part_spans.h), the same bytes.
+// The CPU computes them for many rows at once (part_spans.h): the same scores.
 struct RowSpan {
   double A, B, xlo, xhi, olo, ohi;
   int ok, shell_ok;
@@ -315,7 +315,9 @@ BT_HD double finishPart(const PartSums& acc, double unknown, double shell_weight
   return mean;
 }
 
-// The whole part on one thread: the CPU path (VolumeObservation::partScore).
+// The whole part on one thread: the reference. The CPU's VolumeObservation::partScore computes
+// the same bytes with part_spans::scorePart; the GPU kernel and its emulation run these rows
+// (rowTermsAt) and sums (accumulateRow, finishPart) too.
 BT_HD double scorePart(const PartQuadric& q, const ObservationGrid& g, const RowSumsView& sums) {
   const PartSetup s = setupPart(q, g);
   PartSums acc = {0.0, 0.0, 0.0, 0.0};

@@ -4,8 +4,10 @@
 // run a SIMD vector of rows at a time: one Google Highway source (part_spans_hwy.cpp), dispatched
 // at run time like the pSfS kernels (AVX-512, AVX2 under TABLETOP_SIMD=avx2, SSE4, NEON, or
 // Highway's portable target under TABLETOP_SIMD=scalar). Every target does rowSpan's operations
-// in its order, so the spans, and the scores, are the same bytes as part_score::scorePart's
-// (test_volume_observation checks every compiled target).
+// in its order, so the scores are the same bytes as part_score::scorePart's (test_volume_observation
+// checks every compiled target). The spans of rows that meet the part are the same values (a
+// zero's sign may differ: Highway's SSSE3 and SCALAR Ceil / Floor; the scores read the ends as
+// integers); those of rows that miss it (ok = 0) are never read.
 #pragma once
 
 #include <cstdint>

@@ -113,7 +113,8 @@ TEST(VolumeObservation, RowSumsMatchTheVoxelLoop) {
 TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
   // Random parts across and beyond a random volume's faces: cylinders (with a shell when they
   // extrapolate, and some along the x axis, where a row's quadric is linear in x), ellipsoids,
-  // thin parts that catch no voxel centre. Each compiled target's spans against rowSpan's.
+  // thin parts that catch no voxel centre. Each compiled target's scores against the
+  // reference's (part_score::scorePart, whose rows the GPU runs), bit for bit.
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   ObservationParams p;
@@ -147,8 +148,39 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
           << target.name << ", part " << k << ": " << got << " against " << ref;
     }
   }
+  // Quadrics no body part makes, for the branches body parts barely reach: random symmetric Q
+  // (ellipsoid-like, hyperboloid-like) and Q with no x^2 term (v^T Q v linear along a row: its
+  // rising, falling and flat clips), random planes, over a random box.
+  int general = 0;
+  for (int k = 0; k < 300; ++k, ++general) {
+    part_score::PartQuadric q{};
+    for (int i = 0; i < 4; ++i)
+      for (int j = i; j < 4; ++j) q.Q[4 * j + i] = q.Q[4 * i + j] = (i == j && i < 3 ? 40.0 : 10.0) * u(rng);
+    if (k % 3 == 0) q.Q[0] = 0.0;
+    q.Q[15] = -1.0 + 0.5 * u(rng);
+    q.num_planes = k % 3;
+    for (int p = 0; p < 2; ++p)
+      for (int i = 0; i < 4; ++i) q.planes[p][i] = p < q.num_planes ? (i == 3 ? 0.3 : 1.0) * u(rng) : 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const double c = (i == 2 ? 0.375 : 0.0) + 0.6 * u(rng), e = 0.05 + 0.15 * std::abs(u(rng));
+      q.lo[i] = c - e;
+      q.hi[i] = c + e;
+    }
+    q.extrapolate = k % 2;
+    q.shell_weight = k % 4 == 1 ? 0.5 : 0.0;
+    for (int i = 0; i < 16; ++i) q.shell_Q[i] = 0.8 * q.Q[i];
+    q.shell_Q[15] = q.Q[15];
+    const double ref = part_score::scorePart(q, g, sums);
+    rows_seen += part_score::rowCount(part_score::setupPart(q, g));
+    for (const part_spans::Target& target : targets) {
+      const double got = part_spans::scorePart(q, g, sums, target.fn, &rows);
+      EXPECT_EQ(std::memcmp(&got, &ref, sizeof got), 0)
+          << target.name << ", general quadric " << k << ": " << got << " against " << ref;
+    }
+  }
   EXPECT_GT(rows_seen, 400 * 20) << "the parts should cover many rows";
-  std::printf("compared %d parts (%d rows) on %zu targets:", 400, rows_seen, targets.size());
+  std::printf("compared %d parts and %d general quadrics (%d rows) on %zu targets:", 400, general,
+              rows_seen, targets.size());
   for (const part_spans::Target& target : targets) std::printf(" %s", target.name);
   std::printf("\n");
 }

@@ -22,8 +22,9 @@ struct PapfParams {
   // instead of the trunk layers' survivors' values. Resampling in the trunk's layers copies
   // whole particles, so the arms' coordinates collapse to the few that rode on surviving trunks,
   // and the arm layers' diffusion (a share of that collapsed spread) cannot restore them. The
-  // arms' coordinates are joint angles relative to the chest, so any propagated arm state fits
-  // any surviving trunk. false = the thesis (5.2.1). Reach_targets, 5 seeds: hands 20.5 ->
+  // arms' coordinates are joint angles relative to the chest, so a propagated arm is a valid arm
+  // on any surviving trunk (an arm proposed from a skin voxel, proposal_fraction, was aimed from
+  // its own shoulder and misses the voxel by the trunks' difference). false = the thesis (5.2.1). Reach_targets, 5 seeds: hands 20.5 ->
   // 13.3 mm, elbows 33.5 -> 19.0 mm (median), at no cost.
   bool reseed_arms = true;
   // Prediction f_t: each particle moves by this share of the estimate's last step (a damped
