@@ -345,6 +345,10 @@ void Papf::finishEstimate() {
   estimate_.frames = forwardKinematics(profile_, estimate_.state);
   const BodyParts parts = buildParts(profile_, estimate_.frames);
   estimate_.score = observation_.score(parts, &estimate_.part_scores) / kNumParts;
+  double trunk = 0;
+  for (Part p : {Part::ABDOMEN, Part::CHEST, Part::HEAD})
+    trunk += observation_.partMean(parts[static_cast<int>(p)], isSkinPart(p), isTrunkPart(p));
+  estimate_.trunk_score = trunk / 3.0;
   estimate_.tracking = true;
   const int layers = params_.layers;
   for (int k = 0; k < kPartitions; ++k)
@@ -470,7 +474,9 @@ const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
       estimate_.hands.position = estimate_.frames.hand;
     }
     ++estimate_.frames_tracked;
-    bad_frames_ = (!person || estimate_.score < params_.lost_score) ? bad_frames_ + 1 : 0;
+    // The trunk judges a loss: an arm that leaves the workspace reads the unknown likelihood
+    // outside the grid (and a restart would not find it there either).
+    bad_frames_ = (!person || estimate_.trunk_score < params_.lost_score) ? bad_frames_ + 1 : 0;
     if (bad_frames_ >= params_.lost_frames) reset();
   }
   times_.total_ms = msSince(t0);

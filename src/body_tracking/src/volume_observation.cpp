@@ -106,14 +106,29 @@ void VolumeObservation::buildRowSums(const psfs::VoxelGrid& g, const std::vector
   }
 }
 
+namespace {
+// part_score.h's arithmetic, as the GPU particle weights do it, with the rows' intervals a SIMD
+// vector at a time (part_spans.h: the same bytes as part_score::scorePart).
+double scoreWith(const TruncatedQuadric& part, bool skin_part, bool extrapolate,
+                 const ObservationParams& op, const psfs::VoxelGrid& grid,
+                 const VolumeObservation::RowSums& sums) {
+  thread_local part_spans::SpanRows rows;
+  return part_spans::scorePart(plainPart(part, skin_part, extrapolate, op),
+                               plainGrid(grid, op.unknown_likelihood), rowSumsView(sums),
+                               part_spans::activeSpans(), &rows);
+}
+}  // namespace
+
 double VolumeObservation::partScore(const TruncatedQuadric& part, bool skin_part,
                                      bool extrapolate) const {
-  // part_score.h's arithmetic, as the GPU particle weights do it, with the rows' intervals a
-  // SIMD vector at a time (part_spans.h: the same bytes as part_score::scorePart).
-  thread_local part_spans::SpanRows rows;
-  return part_spans::scorePart(plainPart(part, skin_part, extrapolate, params_),
-                               plainGrid(grid_, params_.unknown_likelihood),
-                               rowSumsView(rowSums(skin_part)), part_spans::activeSpans(), &rows);
+  return scoreWith(part, skin_part, extrapolate, params_, grid_, rowSums(skin_part));
+}
+
+double VolumeObservation::partMean(const TruncatedQuadric& part, bool skin_part,
+                                   bool extrapolate) const {
+  ObservationParams no_shell = params_;
+  no_shell.trunk_shell_weight = 0.0;
+  return scoreWith(part, skin_part, extrapolate, no_shell, grid_, rowSums(skin_part));
 }
 
 double VolumeObservation::score(const BodyParts& parts,

@@ -270,6 +270,10 @@ TEST(VolumeObservation, WithItsShellATrunkSunkInALargerBlobScoresBelowTheOneOnIt
         << "downsample " << ds;
     // Limbs and the head have no shell.
     EXPECT_EQ(shell.partScore(truth, false, false), plain.partScore(truth, false, false));
+    // partMean (what judges a lost track) is the mean alone, the shell's term left out.
+    EXPECT_EQ(shell.partMean(truth, false, true), plain.partScore(truth, false, true));
+    EXPECT_EQ(shell.partMean(forward, false, true), plain.partScore(forward, false, true));
+    EXPECT_LT(shell.partScore(truth, false, true), shell.partMean(truth, false, true));
   }
 }
 

@@ -44,6 +44,9 @@ struct BodyEstimate {
   RefinedHands hands;
   std::array<double, kNumParts> part_scores{};  // the estimate's mean likelihood per part
   double score = 0;          // mean over parts, at most 1 (the trunk's shells take off)
+  // How much of the abdomen, chest and head the volume fills (their mean likelihood without the
+  // trunk's shell, VolumeObservation::partMean, averaged): what judges a loss.
+  double trunk_score = 0;
   double trunk_girth = 1.0;  // the trunk's girth factor in use (trunk_girth.h)
   int frames_tracked = 0;
   // Solved exponents (diagnostics), per partition (trunk, left, right), layer L first.

@@ -51,7 +51,13 @@ struct PapfParams {
   // Track start and loss.
   int min_person_voxels = 60;   // occupied voxels (working resolution) that make a person
   int init_runs = 6;            // annealing runs on the first volume of a new track
-  double lost_score = 0.35;     // mean per-part score below which a frame counts as bad
+  // A frame counts as bad when the volume fills less than this of the trunk (the mean
+  // likelihood inside the abdomen, chest and head, without the shell's term;
+  // BodyEstimate::trunk_score). The arms do not judge: an arm that leaves the workspace reads the
+  // unknown likelihood outside the grid, and restarting would not find it. Nor does the shell:
+  // on a poor volume its halo term sank a tracked trunk's score below this (generated scenario
+  // random-17 restarted every 8 frames).
+  double lost_score = 0.35;
   int lost_frames = 8;          // consecutive bad frames (or frames without a person) -> lost
   uint64_t seed = 1;
   int threads = 2;

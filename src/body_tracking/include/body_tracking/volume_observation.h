@@ -54,6 +54,10 @@ class VolumeObservation {
   // [-2 trunk_shell_weight, kNumParts]. per_part (optional) receives each part's score.
   double score(const BodyParts& parts, std::array<double, kNumParts>* per_part = nullptr) const;
   double partScore(const TruncatedQuadric& part, bool skin_part, bool extrapolate) const;
+  // The part's weighted mean likelihood alone, without the trunk's shell term: how much of the
+  // part the volume fills (what judges a lost track; the shell's halo term varies with the
+  // volume's quality).
+  double partMean(const TruncatedQuadric& part, bool skin_part, bool extrapolate) const;
 
   // Number of voxels above p = 0.5 in the (downsampled) body volume, and their bounds.
   int occupiedVoxels() const { return occupied_; }
