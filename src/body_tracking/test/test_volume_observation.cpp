@@ -128,6 +128,16 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
   ASSERT_FALSE(targets.empty());
   part_spans::SpanRows rows;
   int rows_seen = 0;
+  // Every target's score of q against the reference's, bit for bit.
+  const auto compare = [&](const part_score::PartQuadric& q, const char* what, int k) {
+    const double ref = part_score::scorePart(q, g, sums);
+    rows_seen += part_score::rowCount(part_score::setupPart(q, g));
+    for (const part_spans::Target& target : targets) {
+      const double got = part_spans::scorePart(q, g, sums, target.fn, &rows);
+      EXPECT_EQ(std::memcmp(&got, &ref, sizeof got), 0)
+          << target.name << ", " << what << " " << k << ": " << got << " against " << ref;
+    }
+  };
   for (int k = 0; k < 400; ++k) {
     Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
     if (k % 8 == 3)  // the axis along x: Q's x^2 coefficient is 0
@@ -139,14 +149,7 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
     const TruncatedQuadric t = k % 2
         ? TruncatedQuadric::cylinder(f, 0.3 + 0.1 * u(rng), thin * (0.05 + 0.03 * u(rng)), 0.04 + 0.02 * u(rng))
         : TruncatedQuadric::ellipsoid(f, thin * (Vector3d(0.08, 0.1, 0.12) + 0.03 * Vector3d(u(rng), u(rng), u(rng))));
-    const part_score::PartQuadric q = plainPart(t, false, k % 4 < 2, p);
-    const double ref = part_score::scorePart(q, g, sums);
-    rows_seen += part_score::rowCount(part_score::setupPart(q, g));
-    for (const part_spans::Target& target : targets) {
-      const double got = part_spans::scorePart(q, g, sums, target.fn, &rows);
-      EXPECT_EQ(std::memcmp(&got, &ref, sizeof got), 0)
-          << target.name << ", part " << k << ": " << got << " against " << ref;
-    }
+    compare(plainPart(t, false, k % 4 < 2, p), "part", k);
   }
   // Quadrics no body part makes, for the branches body parts barely reach: random symmetric Q
   // (ellipsoid-like, hyperboloid-like) and Q with no x^2 term (v^T Q v linear along a row: its
@@ -170,13 +173,7 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
     q.shell_weight = k % 4 == 1 ? 0.5 : 0.0;
     for (int i = 0; i < 16; ++i) q.shell_Q[i] = 0.8 * q.Q[i];
     q.shell_Q[15] = q.Q[15];
-    const double ref = part_score::scorePart(q, g, sums);
-    rows_seen += part_score::rowCount(part_score::setupPart(q, g));
-    for (const part_spans::Target& target : targets) {
-      const double got = part_spans::scorePart(q, g, sums, target.fn, &rows);
-      EXPECT_EQ(std::memcmp(&got, &ref, sizeof got), 0)
-          << target.name << ", general quadric " << k << ": " << got << " against " << ref;
-    }
+    compare(q, "general quadric", k);
   }
   EXPECT_GT(rows_seen, 400 * 20) << "the parts should cover many rows";
   std::printf("compared %d parts and %d general quadrics (%d rows) on %zu targets:", 400, general,
