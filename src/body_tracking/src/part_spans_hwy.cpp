@@ -149,43 +149,22 @@ namespace part_spans {
 
 HWY_EXPORT(Spans);
 
-namespace {
-// The slot of HWY_DISPATCH_TABLE for `target` (what ChosenTarget::GetIndex() computes; the
-// fallback, EMU128 or SCALAR, sits in the last slot).
-size_t dispatchIndex(int64_t target) {
-  return hwy::Num0BitsBelowLS1Bit_Nonzero64(static_cast<uint64_t>(
-      (HWY_CHOSEN_TARGET_SHIFT(target) | HWY_CHOSEN_TARGET_MASK_SCALAR) & HWY_CHOSEN_TARGET_MASK_TARGETS));
-}
-
-// The pSfS kernels' choice (psfs_kernels.cpp): the best target, without AVX-512 where the
-// kernels are limited to AVX2, or the portable one where the scalar kernels are forced.
-int64_t activeTarget() {
-  const int64_t portable = HWY_EMU128 | HWY_SCALAR;
-  int64_t no_avx512 = HWY_AVX3 | HWY_AVX3_DL;
-#ifdef HWY_AVX3_ZEN4
-  no_avx512 |= HWY_AVX3_ZEN4;
-#endif
-  const bool vector = !psfs::scalarKernelsForced();
-  const int64_t allowed = !vector ? portable : psfs::avx512KernelsActive() ? ~int64_t(0) : ~no_avx512;
-  static const int64_t supported = hwy::SupportedTargets();  // CPUID on every call: once
-  const int64_t usable = supported & HWY_TARGETS & allowed;
-  const int64_t fallback = HWY_TARGETS & portable;
-  return usable != 0 ? usable & -usable : fallback & -fallback;  // lower bit: better target
-}
-}  // namespace
-
+// The target choice and the table slots are the pSfS kernels' (psfs/simd_dispatch.h), so the
+// same switches (TABLETOP_SIMD, force*Kernels) apply.
 void SpanRows::resize(size_t n) {
   const size_t padded = (n + 15) / 16 * 16;  // whole vectors of up to 16 lanes
   for (std::vector<double>* v : {&yy, &z, &A, &B, &xlo, &xhi, &olo, &ohi, &ok, &shell_ok})
     if (v->size() < padded) v->resize(padded, 0.0);
 }
 
-SpansFn activeSpans() { return HWY_DISPATCH_TABLE(Spans)[dispatchIndex(activeTarget())]; }
+SpansFn activeSpans() {
+  return HWY_DISPATCH_TABLE(Spans)[psfs::highwayDispatchIndex(psfs::highwayTarget())];
+}
 
 std::vector<Target> availableTargets() {
   std::vector<Target> out;
   for (int64_t t : hwy::SupportedAndGeneratedTargets())
-    out.push_back({t, hwy::TargetName(t), HWY_DISPATCH_TABLE(Spans)[dispatchIndex(t)]});
+    out.push_back({t, hwy::TargetName(t), HWY_DISPATCH_TABLE(Spans)[psfs::highwayDispatchIndex(t)]});
   return out;
 }
 

@@ -162,7 +162,8 @@ int64_t hwyRowTarget(bool vector, bool avx512) {
   no_avx512 |= HWY_AVX3_ZEN4;
 #endif
   const int64_t allowed = !vector ? portable : avx512 ? ~int64_t(0) : ~no_avx512;
-  const int64_t usable = hwy::SupportedTargets() & HWY_TARGETS & allowed;
+  static const int64_t supported = hwy::SupportedTargets();  // it runs CPUID on every call
+  const int64_t usable = supported & HWY_TARGETS & allowed;
   const int64_t fallback = HWY_TARGETS & portable;
   return usable != 0 ? usable & -usable : fallback & -fallback;  // lower bit: better target
 }

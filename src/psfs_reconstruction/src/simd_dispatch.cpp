@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "cpu_dispatch.h"
+#include "psfs_kernels.h"
 
 namespace psfs {
 namespace {
@@ -58,5 +59,9 @@ void forceAvx2Kernels(bool force) { g_force_avx2.store(force); }
 bool avx512KernelsActive() {
   return vectorKernelsActive() && avx512Available() && !g_force_avx2.load(std::memory_order_relaxed);
 }
+
+int64_t highwayTarget() { return detail::hwyRowTarget(!scalarKernelsForced(), avx512KernelsActive()); }
+
+size_t highwayDispatchIndex(int64_t target) { return detail::hwyDispatchIndex(target); }
 
 }  // namespace psfs

@@ -9,6 +9,9 @@
 // -march flag and still runs on any x86-64 (or other) CPU.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
+
 // The environment variable TABLETOP_SIMD=avx2 (or =scalar) makes a process start with the AVX2
 // (or scalar) kernels: the suite and the demo then run as on a machine without AVX-512.
 namespace psfs {
@@ -30,5 +33,12 @@ bool avx512Available();
 void forceAvx2Kernels(bool force);
 // True if the pSfS kernels use AVX-512 now.
 bool avx512KernelsActive();
+
+// For other packages' Highway kernels (body_tracking's part_spans_hwy.cpp), so that they follow
+// the same switches: the Highway target (HWY_AVX3, HWY_AVX2, ..., or the portable one where the
+// scalar kernels are forced) the pSfS row kernels use now, and a target's slot in the
+// HWY_DISPATCH_TABLE of a kernel built with the default Highway targets less SVE and RVV.
+int64_t highwayTarget();
+size_t highwayDispatchIndex(int64_t target);
 
 }  // namespace psfs
