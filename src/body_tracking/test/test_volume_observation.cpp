@@ -127,6 +127,7 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
   const std::vector<part_spans::Target> targets = part_spans::availableTargets();
   ASSERT_FALSE(targets.empty());
   part_spans::SpanRows rows;
+  constexpr int kParts = 400, kGeneral = 300;
   int rows_seen = 0;
   // Every target's score of q against the reference's, bit for bit.
   const auto compare = [&](const part_score::PartQuadric& q, const char* what, int k) {
@@ -138,7 +139,7 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
           << target.name << ", " << what << " " << k << ": " << got << " against " << ref;
     }
   };
-  for (int k = 0; k < 400; ++k) {
+  for (int k = 0; k < kParts; ++k) {
     Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
     if (k % 8 == 3)  // the axis along x: Q's x^2 coefficient is 0
       f.linear() = Eigen::AngleAxisd(M_PI / 2, Vector3d::UnitY()).toRotationMatrix();
@@ -154,8 +155,7 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
   // Quadrics no body part makes, for the branches body parts barely reach: random symmetric Q
   // (ellipsoid-like, hyperboloid-like) and Q with no x^2 term (v^T Q v linear along a row: its
   // rising, falling and flat clips), random planes, over a random box.
-  int general = 0;
-  for (int k = 0; k < 300; ++k, ++general) {
+  for (int k = 0; k < kGeneral; ++k) {
     part_score::PartQuadric q{};
     for (int i = 0; i < 4; ++i)
       for (int j = i; j < 4; ++j) q.Q[4 * j + i] = q.Q[4 * i + j] = (i == j && i < 3 ? 40.0 : 10.0) * u(rng);
@@ -175,8 +175,8 @@ TEST(VolumeObservation, EveryInstructionSetGivesTheReferenceBytes) {
     q.shell_Q[15] = q.Q[15];
     compare(q, "general quadric", k);
   }
-  EXPECT_GT(rows_seen, 400 * 20) << "the parts should cover many rows";
-  std::printf("compared %d parts and %d general quadrics (%d rows) on %zu targets:", 400, general,
+  EXPECT_GT(rows_seen, kParts * 20) << "the parts should cover many rows";
+  std::printf("compared %d parts and %d general quadrics (%d rows) on %zu targets:", kParts, kGeneral,
               rows_seen, targets.size());
   for (const part_spans::Target& target : targets) std::printf(" %s", target.name);
   std::printf("\n");

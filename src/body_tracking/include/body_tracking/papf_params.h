@@ -24,8 +24,9 @@ struct PapfParams {
   // and the arm layers' diffusion (a share of that collapsed spread) cannot restore them. The
   // arms' coordinates are joint angles relative to the chest, so a propagated arm is a valid arm
   // on any surviving trunk (an arm proposed from a skin voxel, proposal_fraction, was aimed from
-  // its own shoulder and misses the voxel by the trunks' difference). false = the thesis (5.2.1). Reach_targets, 5 seeds: hands 20.5 ->
-  // 13.3 mm, elbows 33.5 -> 19.0 mm (median), at no cost.
+  // its own shoulder and misses the voxel by the trunks' difference). false = the thesis
+  // (5.2.1). Reach_targets, 5 seeds: hands 20.5 -> 13.3 mm, elbows 33.5 -> 19.0 mm (median),
+  // at no cost.
   bool reseed_arms = true;
   // Prediction f_t: each particle moves by this share of the estimate's last step (a damped
   // constant velocity, in the tangent coordinates), so fast reaches do not leave the arm behind.

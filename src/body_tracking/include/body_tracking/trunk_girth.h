@@ -7,7 +7,8 @@
 // tracker uses the factor with the best sum so far and keeps it once `frames` frames are in.
 // The pose is the one tracked with the girth of the frame before, so the two settle together.
 // Off by default (PapfParams::shape.frames = 0). Measured on generated people (2026-12-05,
-// docs/benchmarks.md, with the shell then counted inside the grid only): the factor follows the person's trunk width (true size x girth 0.90 /
+// docs/benchmarks.md, with the shell then counted inside the grid only): the factor follows
+// the person's trunk width (true size x girth 0.90 /
 // 0.92 / 1.10 / 1.19 / 1.20 / 1.25 -> 0.90 / 0.95 / 1.05 / 1.10 / 1.15 / 1.10, the widest
 // under-read), but tracking did not gain (10 scenarios x 2 seeds: hands median 73 -> 55 and
 // 47 -> 65 mm, head 35 -> 36 and 23 -> 30): the wide people's trunks still sink, and the

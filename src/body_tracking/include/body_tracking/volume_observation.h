@@ -29,7 +29,8 @@ struct ObservationParams {
   double unknown_likelihood = 0.3;  // head and limb voxels outside the grid
   // The trunk parts' shell (part_score.h): each trunk cylinder's score is less
   // trunk_shell_weight times the mean likelihood between it and the cylinder grown sideways by
-  // trunk_shell_width (m), rows beyond the grid read like the trunk's own (nearest grid row). The mean inside alone is ~0.9 for any trunk sunk in the blob of
+  // trunk_shell_width (m), rows beyond the grid read like the trunk's own (nearest grid row).
+  // The mean inside alone is ~0.9 for any trunk sunk in the blob of
   // trunk, arms and halo, and the trunk wandered in it (test_papf_sim: yaw 5 deg, bend 8 deg,
   // 13 mm forward, which put the shoulders 3 cm off and the arms with them); an empty shell
   // holds it to the real boundary. 0 = the thesis' observation.
