@@ -9,6 +9,7 @@
 //   bench_papf --benchmark_repetitions=3 [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 
+#include "body_tracking/arm_length.h"
 #include "body_tracking/papf.h"
 #include "body_tracking/silhouette_mask.h"
 #include "hand_tracking/mpf_tracker.h"
@@ -25,6 +26,7 @@ void BM_PapfUpdate(benchmark::State& st) {
   p.layers = static_cast<int>(st.range(1));
   p.observation.downsample = static_cast<int>(st.range(2));
   p.threads = static_cast<int>(st.range(3));
+  p.arm_length.frames = 0;  // the steady state: the arms' votes (BM_ArmLengthVote) end after ~2 s
   Papf papf(BodyProfile(), p);
   const size_t n = f.body.size();
   for (size_t i = 0; i < n; ++i) papf.update(f.body[i], &f.skin[i]);  // start and warm up
@@ -91,6 +93,23 @@ void BM_Masks8Cameras(benchmark::State& st) {
   }
 }
 BENCHMARK(BM_Masks8Cameras)->ArgName("margin_px")->Arg(0)->Arg(4)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// One frame's vote of the arms' length refinement (arm_length.h), which runs on top of the
+// update over a track's first shape/arm_frames frames only: both arms, 13 factors x 6 hand
+// targets each, on the estimate after the 40 frames.
+void BM_ArmLengthVote(benchmark::State& st) {
+  const Frames& f = frames();
+  Papf papf(BodyProfile{}, PapfParams{});
+  for (size_t i = 0; i < f.body.size(); ++i) papf.update(f.body[i], &f.skin[i]);
+  const BodyEstimate& e = papf.estimate();
+  ArmLengthParams ap;
+  ap.frames = 1 << 30;
+  ArmLength arms(ap);
+  for (auto _ : st) arms.add(papf.observation(), papf.profile(), e.state, e.hands);
+  st.counters["voting_arms"] = e.hands.from_skin[0] + e.hands.from_skin[1];
+  st.counters["factor"] = arms.factor();
+}
+BENCHMARK(BM_ArmLengthVote)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace body_tracking

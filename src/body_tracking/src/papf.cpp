@@ -9,7 +9,6 @@
 
 #include "body_tracking/arm_ik.h"
 #include "body_tracking/state_tangent.h"
-#include "part_score.h"
 #include "scored_parts.h"
 
 namespace body_tracking {
@@ -41,6 +40,7 @@ Papf::Papf(const BodyProfile& profile, const PapfParams& params)
       profile_(profile),
       params_(params),
       girth_(params.shape),
+      arms_(params.arm_length),
       observation_(params.observation),
       rng_(params.seed) {
   profile_.validate();
@@ -69,21 +69,28 @@ void Papf::reset() {
 
 void Papf::restartShape() {  // a new track, perhaps a new person: the profile as given
   girth_.reset();
+  arms_.reset();
   profile_ = base_profile_;
+}
+
+void Papf::refineShape() {
+  if (!girth_.refining() && !arms_.refining()) return;
+  // This frame's pose, tracked with the shape so far, votes; the next frame uses the best.
+  girth_.add(observation_, base_profile_, estimate_.state);
+  const BodyProfile girthed = TrunkGirth::scaled(base_profile_, girth_.factor());
+  arms_.add(observation_, girthed, estimate_.state, estimate_.hands);
+  const BodyProfile before = profile_;
+  profile_ = ArmLength::scaled(girthed, arms_.factor());
+  // The reported joints follow the profile in use, so that the frames and profile() drawn
+  // together (markers, masks) agree.
+  if (profile_.upper_arm != before.upper_arm || profile_.forearm != before.forearm)
+    estimate_.frames = forwardKinematics(profile_, estimate_.state);
 }
 
 static_assert(Papf::kPartitions == kPapfPartitions, "scored_parts.h lists the partitions");
 
 double Papf::scoreState(const BodyState& s, int partition) const {
-  BodyParts parts;
-  const bool collides = buildScoredParts(profile_, s, partition, &parts);
-  Part scored[kNumParts];
-  const int n = scoredParts(partition, scored);
-  double part_scores[kNumParts];
-  for (int k = 0; k < n && !collides; ++k)
-    part_scores[k] = observation_.partScore(parts[static_cast<int>(scored[k])], isSkinPart(scored[k]),
-                                            isTrunkPart(scored[k]));
-  return part_score::particleScore(part_scores, n, collides);
+  return scorePartition(observation_, profile_, s, partition);
 }
 
 void Papf::scoreAll(int partition) {
@@ -460,12 +467,6 @@ const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
     anneal(true);
     velocity_ = toTangent(previous_state_, estimate_.state);
   }
-  if (estimate_.tracking && girth_.refining()) {
-    // This frame's pose, tracked with the girth so far, votes; the next frame uses the best.
-    girth_.add(observation_, base_profile_, estimate_.state);
-    profile_ = TrunkGirth::scaled(base_profile_, girth_.factor());
-  }
-  estimate_.trunk_girth = girth_.factor();
   if (estimate_.tracking) {
     if (skin) {
       estimate_.hands = refineHands(*skin, estimate_.frames, params_.hands);
@@ -473,12 +474,15 @@ const BodyEstimate& Papf::update(const psfs::ProbabilityVolume& body,
       estimate_.hands = RefinedHands();
       estimate_.hands.position = estimate_.frames.hand;
     }
+    refineShape();
     ++estimate_.frames_tracked;
     // The trunk judges a loss: an arm that leaves the workspace reads the unknown likelihood
     // outside the grid (and a restart would not find it there either).
     bad_frames_ = (!person || estimate_.trunk_score < params_.lost_score) ? bad_frames_ + 1 : 0;
     if (bad_frames_ >= params_.lost_frames) reset();
   }
+  estimate_.trunk_girth = girth_.factor();
+  estimate_.arm_length = arms_.factor();
   times_.total_ms = msSince(t0);
   return estimate_;
 }

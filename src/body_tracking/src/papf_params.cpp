@@ -36,6 +36,7 @@ void PapfParams::validate() const {
   if (!(proposal_fraction >= 0 && proposal_fraction <= 1)) bad("proposal_fraction", "must be in [0, 1]");
   if (!(proposal_head_clearance >= 0)) bad("proposal_head_clearance", "must be >= 0");
   shape.validate();
+  arm_length.validate();
   if (min_person_voxels < 1) bad("min_person_voxels", "must be >= 1");
   if (init_runs < 1 || init_runs > 100) bad("init_runs", "must be in 1..100");
   if (!(lost_score >= 0 && lost_score <= 1)) bad("lost_score", "must be in [0, 1]");

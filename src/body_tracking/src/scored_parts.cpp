@@ -1,6 +1,7 @@
 #include "scored_parts.h"
 
 #include "body_tracking/part_collision.h"
+#include "part_score.h"
 
 namespace body_tracking {
 
@@ -30,6 +31,19 @@ bool buildScoredParts(const BodyProfile& profile, const BodyState& s, int partit
   for (Part p : {Part::ABDOMEN, Part::CHEST, Part::HEAD})
     (*parts)[static_cast<int>(p)] = buildPart(profile, f, p);
   return bodyCollides(profile, f, *parts);
+}
+
+double scorePartition(const VolumeObservation& obs, const BodyProfile& profile, const BodyState& s,
+                      int partition) {
+  BodyParts parts;
+  const bool collides = buildScoredParts(profile, s, partition, &parts);
+  Part scored[kNumParts];
+  const int n = scoredParts(partition, scored);
+  double part_scores[kNumParts];
+  for (int k = 0; k < n && !collides; ++k)
+    part_scores[k] = obs.partScore(parts[static_cast<int>(scored[k])], isSkinPart(scored[k]),
+                                   isTrunkPart(scored[k]));
+  return part_score::particleScore(part_scores, n, collides);
 }
 
 }  // namespace body_tracking

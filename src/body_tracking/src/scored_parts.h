@@ -5,6 +5,7 @@
 #include <array>
 
 #include "body_tracking/body_parts.h"
+#include "body_tracking/volume_observation.h"
 
 namespace body_tracking {
 
@@ -29,5 +30,10 @@ int scoredParts(int partition, Part out[kNumParts]);
 // self-collides (part_collision.h), which scores 0: an arm's pose is checked against the trunk
 // and the other arm as they stand; the trunk chain cannot collide with itself.
 bool buildScoredParts(const BodyProfile& profile, const BodyState& s, int partition, BodyParts* parts);
+
+// A state's score for `partition` (< 0: all parts) as the filter weighs it: its parts' scores
+// summed, 0 for a self-colliding pose (Papf::scoreState, arm_length.h).
+double scorePartition(const VolumeObservation& obs, const BodyProfile& profile, const BodyState& s,
+                      int partition);
 
 }  // namespace body_tracking

@@ -12,21 +12,15 @@
 #include "body_tracking/body_parts.h"
 #include "body_tracking/papf.h"
 #include "body_tracking/trunk_girth.h"
+#include "drawn_body.h"
 
 namespace body_tracking {
 namespace {
 
-// A person at `state` with the trunk of `profile` scaled by `girth`, drawn as 255 inside any
-// part, 0 elsewhere, on the 16 mm workspace grid; the trunk stands wholly inside the grid.
+// A person at `state` with the trunk of `profile` scaled by `girth` (drawn_body.h); the trunk
+// stands wholly inside the grid.
 psfs::ProbabilityVolume drawn(const BodyProfile& profile, const BodyState& state, double girth) {
-  const BodyParts parts = buildParts(TrunkGirth::scaled(profile, girth), state);
-  psfs::ProbabilityVolume v;
-  v.grid = psfs::referenceGrid(psfs::Resolution::k16mm);
-  v.data.assign(v.grid.numVoxels(), 0);
-  for (size_t i = 0; i < v.data.size(); ++i)
-    for (const TruncatedQuadric& p : parts)
-      if (p.contains(v.grid.centre(i))) v.data[i] = 255;
-  return v;
+  return test::drawnVolume(buildParts(TrunkGirth::scaled(profile, girth), state));
 }
 
 BodyState seatedInsideTheGrid() {

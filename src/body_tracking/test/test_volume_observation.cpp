@@ -13,6 +13,7 @@
 
 #include "body_tracking/body_parts.h"
 #include "body_tracking/volume_observation.h"
+#include "drawn_body.h"
 #include "part_spans.h"
 #include "plain_part.h"
 
@@ -196,12 +197,7 @@ TEST(VolumeObservation, ScorePeaksAtThePoseTheVolumeWasDrawnFrom) {
     s[armDof(side, 3)] = 1.3;
   }
   const BodyParts parts = buildParts(profile, s);
-  psfs::ProbabilityVolume body;
-  body.grid = psfs::referenceGrid(psfs::Resolution::k16mm);
-  body.data.assign(body.grid.numVoxels(), 0);
-  for (size_t i = 0; i < body.data.size(); ++i)
-    for (const auto& p : parts)
-      if (p.contains(body.grid.centre(i))) body.data[i] = 255;
+  const psfs::ProbabilityVolume body = test::drawnVolume(parts);
   ObservationParams op;
   op.downsample = 1;
   VolumeObservation obs(op);

@@ -1,8 +1,8 @@
 // The person's measurements: bone lengths and part radii of the quadric body model. Loaded from
 // a YAML body profile (config/body_profile.yaml documents every field); the defaults are the
-// medium-sized adult of the simulated rig (tabletop_sim/body_model.h). The tracker refines only
-// the trunk's girth online, and only when asked (trunk_girth.h, off by default): give a user of
-// another build their own profile.
+// medium-sized adult of the simulated rig (tabletop_sim/body_model.h). The tracker refines the
+// trunk's girth and the arms' length online only when asked (trunk_girth.h, arm_length.h, off
+// by default): give a user of another build their own profile.
 #pragma once
 
 #include <string>

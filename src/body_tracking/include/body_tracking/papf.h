@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "body_tracking/arm_length.h"
 #include "body_tracking/body_parts.h"
 #include "body_tracking/gpu_particle_weights.h"
 #include "body_tracking/hand_refinement.h"
@@ -48,6 +49,7 @@ struct BodyEstimate {
   // trunk's shell, VolumeObservation::partMean, averaged): what judges a loss.
   double trunk_score = 0;
   double trunk_girth = 1.0;  // the trunk's girth factor in use (trunk_girth.h)
+  double arm_length = 1.0;   // the arms' length factor in use (arm_length.h)
   int frames_tracked = 0;
   // Solved exponents (diagnostics), per partition (trunk, left, right), layer L first.
   std::array<double, 24> layer_beta{};
@@ -70,8 +72,8 @@ class Papf {
   void startAt(const BodyState& state);
 
   const BodyEstimate& estimate() const { return estimate_; }
-  // The profile in use: the given one, its trunk's girth refined over a track's first frames
-  // (trunk_girth.h; PapfParams::shape).
+  // The profile in use: the given one, its trunk's girth and arms' length refined over a track's
+  // first frames (trunk_girth.h, arm_length.h; PapfParams::shape, arm_length).
   const BodyProfile& profile() const { return profile_; }
   const PapfParams& params() const { return params_; }
   const BodyLimits& limits() const { return limits_; }
@@ -102,6 +104,7 @@ class Papf {
   int drawIndex(double u) const;    // by the cumulative weights
   void finishEstimate();
   void restartShape();
+  void refineShape();  // this frame's estimate votes on the girth and arm length
   // Hand candidates for the arm proposals: skin voxels, those near the head left out.
   void collectSkinTargets(const Eigen::Vector3d* head);
   bool proposeArm(Side side, BodyState* s, std::uniform_real_distribution<double>* uni);
@@ -109,6 +112,7 @@ class Papf {
   BodyProfile base_profile_, profile_;
   PapfParams params_;
   TrunkGirth girth_;
+  ArmLength arms_;
   BodyLimits limits_;
   VolumeObservation observation_;
   std::mt19937_64 rng_;

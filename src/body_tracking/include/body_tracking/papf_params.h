@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "body_tracking/arm_length.h"
 #include "body_tracking/hand_refinement.h"
 #include "body_tracking/trunk_girth.h"
 #include "body_tracking/volume_observation.h"
@@ -48,7 +49,8 @@ struct PapfParams {
   double proposal_head_clearance = 0.15;  // m: skin this close to the head is not a hand
   ObservationParams observation;
   HandRefinementParams hands;
-  TrunkGirthParams shape;  // the trunk's girth refined over a track's first frames
+  TrunkGirthParams shape;       // the trunk's girth refined over a track's first frames
+  ArmLengthParams arm_length;   // the arms' length refined likewise (arm_length.h)
   // Track start and loss.
   int min_person_voxels = 60;   // occupied voxels (working resolution) that make a person
   int init_runs = 6;            // annealing runs on the first volume of a new track

@@ -13,24 +13,19 @@
 // under-read), but tracking did not gain (10 scenarios x 2 seeds: hands median 73 -> 55 and
 // 47 -> 65 mm, head 35 -> 36 and 23 -> 30): the wide people's trunks still sink, and the
 // lengths (size) cannot be read this way (the pose was fitted with the old lengths, and the
-// old lengths always win).
+// old lengths always win; arm_length.h re-poses the arm for each length instead).
 #pragma once
-
-#include <vector>
 
 #include "body_tracking/body_profile.h"
 #include "body_tracking/body_state.h"
+#include "body_tracking/shape_ladder.h"
 #include "body_tracking/volume_observation.h"
 
 namespace body_tracking {
 
-struct TrunkGirthParams {
-  int frames = 0;       // frames of a track that refine the girth (e.g. 50: 2 s at 25 fps); 0 = off
-  double min = 0.8;     // the ladder of factors: min, min + step, ... <= max (the profile's = 1)
-  double max = 1.4;
-  double step = 0.05;
-  // Throws std::invalid_argument naming the parameter.
-  void validate() const;
+struct TrunkGirthParams : LadderParams {  // keys shape/frames, shape/girth_min, _max, _step
+  TrunkGirthParams() : LadderParams{0, 0.8, 1.4, 0.05} {}
+  void validate() const { LadderParams::validate("frames", "girth"); }
 };
 
 class TrunkGirth {
@@ -38,21 +33,19 @@ class TrunkGirth {
   explicit TrunkGirth(const TrunkGirthParams& params = TrunkGirthParams());
   const TrunkGirthParams& params() const { return params_; }
 
-  void reset();  // a new track (perhaps a new person): back to factor 1
+  void reset() { ladder_.reset(); }  // a new track (perhaps a new person): back to factor 1
   // One frame of the track: the trunk of `state` with `base` scaled by each factor, scored.
   void add(const VolumeObservation& obs, const BodyProfile& base, const BodyState& state);
-  bool refining() const { return params_.frames > 0 && frames_ < params_.frames; }
-  int frames() const { return frames_; }
-  double factor() const { return factor_; }  // the best so far (1 before any frame)
+  bool refining() const { return ladder_.refining(); }
+  int frames() const { return ladder_.frames(); }
+  double factor() const { return ladder_.factor(); }  // the best so far (1 before any frame)
 
   // base with the trunk's half widths and depths (abdomen, chest) times `factor`.
   static BodyProfile scaled(const BodyProfile& base, double factor);
 
  private:
   TrunkGirthParams params_;
-  std::vector<double> factors_, sums_;
-  int frames_ = 0;
-  double factor_ = 1.0;
+  ShapeLadder ladder_;
 };
 
 }  // namespace body_tracking

@@ -264,7 +264,7 @@ class PapfNodelet : public nodelet::Nodelet {
     targets_pub_.publish(targets);
 
     visualization_msgs::MarkerArray markers;
-    const BodyParts parts = buildParts(profile_, f);
+    const BodyParts parts = buildParts(papf_->profile(), f);  // with its online shape
     std::vector<geometry_msgs::TransformStamped> tfs;
     for (int i = 0; i < kNumParts; ++i) {
       const TruncatedQuadric& q = parts[i];
@@ -372,6 +372,11 @@ class PapfNodelet : public nodelet::Nodelet {
     stat.add("losses", losses_);
     stat.add("time jumps back (started over)", time_jumps_);
     stat.add("papf total (ms)", total_ms_.mean());
+    // The online shape in use (papf.yaml shape/*; 1 = the body profile as given).
+    stat.add("trunk girth factor", papf_->estimate().trunk_girth);
+    stat.add("arm length factor", papf_->estimate().arm_length);
+    stat.add("upper arm, forearm (m)", std::to_string(papf_->profile().upper_arm) + ", " +
+                                           std::to_string(papf_->profile().forearm));
     stat.add("volumes rejected", rejected_);
   }
 
