@@ -5,7 +5,7 @@
 // is the drawn one within 0.06: one working voxel (the observation's 32 mm) over the 0.6 m from
 // shoulder to hand, what the volume resolves. Also: arms without a found hand do not vote, the
 // PAPF tracks with the refined arms and forgets them on reset, it is on by default, and bad
-// parameters throw.
+// ladder parameters (this refinement's and the trunk girth's) throw naming their key.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -14,6 +14,7 @@
 #include "body_tracking/arm_length.h"
 #include "body_tracking/body_parts.h"
 #include "body_tracking/papf.h"
+#include "body_tracking/trunk_girth.h"
 #include "drawn_body.h"
 
 namespace body_tracking {
@@ -147,20 +148,38 @@ TEST(ArmLength, ScalesOnlyTheArmBonesAndOnByDefault) {
   ArmLength on;  // the default: 50 voting frames (papf.yaml shape/arm_frames)
   EXPECT_TRUE(on.refining());
   EXPECT_EQ(on.params().frames, 50);
-  ArmLengthParams bad;
-  bad.max = 0.9;
-  EXPECT_THROW(ArmLength{bad}, std::invalid_argument);
-  bad = ArmLengthParams();
-  bad.step = 0.0;
-  EXPECT_THROW(ArmLength{bad}, std::invalid_argument);
-  bad = ArmLengthParams();
-  bad.frames = -2;
+}
+
+// Both refinements' ladders (shape_ladder.h) reject bad parameters, naming papf.yaml's key.
+template <class Refinement, class Params>
+void expectRejected(Params bad, const std::string& key) {
   try {
-    ArmLength{bad};
-    FAIL() << "frames < 0 accepted";
+    Refinement{bad};
+    ADD_FAILURE() << key << " accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("shape/arm_frames"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("shape/" + key), std::string::npos) << e.what();
   }
+}
+
+TEST(ShapeLadder, BadParametersThrowNamingTheirKey) {
+  ArmLengthParams a;
+  a.max = 0.9;
+  expectRejected<ArmLength>(a, "arm_max");
+  a = ArmLengthParams();
+  a.step = 0.0;
+  expectRejected<ArmLength>(a, "arm_step");
+  a = ArmLengthParams();
+  a.frames = -2;
+  expectRejected<ArmLength>(a, "arm_frames");
+  TrunkGirthParams g;
+  g.min = 1.2;
+  expectRejected<TrunkGirth>(g, "girth_min");
+  g = TrunkGirthParams();
+  g.step = 0.0;
+  expectRejected<TrunkGirth>(g, "girth_step");
+  g = TrunkGirthParams();
+  g.frames = -1;
+  expectRejected<TrunkGirth>(g, "frames");
 }
 
 }  // namespace
