@@ -223,8 +223,10 @@ void MpfTracker::endMergedAndLostTracks(const Reclustering& r) {
     if (!c.active || continues[s]) continue;
     int into = r.merged_into_mean[s] >= 0 ? r.slot_of[r.merged_into_mean[s]] : -1;
     if (into >= 0 && !continues[into]) into = -1;
-    endTrack(s, into, into >= 0 ? Eigen::Vector3d(old_estimate[s] - old_estimate[into])
-                                : Eigen::Vector3d::Zero());
+    Eigen::Vector3d side = Eigen::Vector3d::Zero();
+    if (into >= 0)
+      side = c.apart_offset.isZero() ? Eigen::Vector3d(old_estimate[s] - old_estimate[into]) : c.apart_offset;
+    endTrack(s, into, side);
   }
 }
 
@@ -276,6 +278,17 @@ void MpfTracker::updateReportedEstimates() {
       if (fit.ok) c.reported = fit.centre;
     }
   }
+  recordHandSides();
+}
+
+// Each hand's side of the other while the two are clearly apart (Component::apart_offset).
+void MpfTracker::recordHandSides() {
+  Component &a = comps_[1], &b = comps_[2];
+  if (!a.active || !b.active || a.type != Target::kHand || b.type != Target::kHand) return;
+  const Eigen::Vector3d d = a.estimate - b.estimate;
+  if (d.norm() < params_.split_distance) return;
+  a.apart_offset = d;
+  b.apart_offset = -d;
 }
 
 }  // namespace hand_tracking

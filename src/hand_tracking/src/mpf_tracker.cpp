@@ -236,6 +236,8 @@ void MpfTracker::assignIdentity(int s, const Eigen::Vector3d& at) {
   }
   c.active_since = time_;
   c.merged_into = -1;
+  c.apart_offset.setZero();  // a new pairing: its side is read afresh
+  if (c.type == Target::kHand) comps_[s == 1 ? 2 : 1].apart_offset.setZero();
 }
 
 void MpfTracker::activate(int s, const Eigen::Vector3d& at) {

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -43,19 +44,30 @@ struct StreamFrame {
   const sim::SimulatedRig* rig = nullptr;
 };
 
+// The reconstructor's defaults on 2 threads; `footprint`: the footprint-filtered body and skin
+// evidence (psfs.yaml fusion/{body,skin}/footprint) instead of the multi-projection.
+inline psfs::ReconstructorParams streamParams(bool footprint = false) {
+  psfs::ReconstructorParams rp;
+  rp.threads = 2;
+  if (footprint) {
+    rp.body.multi_projection = rp.skin.multi_projection = false;
+    rp.body.footprint = rp.skin.footprint = true;
+  }
+  return rp;
+}
+
 // Renders and reconstructs `script` (after kLearnFrames + extra_empty empty frames; with
-// extra_empty > 0 the stream starts with extra_empty reconstructed empty frames) and calls
-// fn(const StreamFrame&) for each reconstructed frame, at most max_frames (< 0: all).
+// extra_empty > 0 the stream starts with extra_empty reconstructed empty frames) with `rp` and
+// calls fn(const StreamFrame&) for each reconstructed frame, at most max_frames (< 0: all).
 // Returns the number of frames streamed.
 template <typename Fn>
-int streamSequence(const std::string& script, int extra_empty, int max_frames, Fn&& fn) {
+int streamSequence(const psfs::ReconstructorParams& rp, const std::string& script, int extra_empty,
+                   int max_frames, Fn&& fn) {
   const auto t0 = std::chrono::steady_clock::now();
   sim::SimOptions o;
   o.script = script;
   o.empty_frames = kLearnFrames + extra_empty;
   sim::SimulatedRig rig(o);
-  psfs::ReconstructorParams rp;
-  rp.threads = 2;
   psfs::Reconstructor rec(psfs::GaussianMixture2D::load(HAND_TRACKING_SKIN_MODEL), rp);
   StreamFrame s;
   std::string grid = "no volumes";
@@ -89,6 +101,11 @@ int streamSequence(const std::string& script, int extra_empty, int max_frames, F
               "track)\n", script.c_str(), s.k, grid.c_str(),
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return s.k;
+}
+
+template <typename Fn>
+int streamSequence(const std::string& script, int extra_empty, int max_frames, Fn&& fn) {
+  return streamSequence(streamParams(), script, extra_empty, max_frames, std::forward<Fn>(fn));
 }
 
 }  // namespace hand_tracking_test

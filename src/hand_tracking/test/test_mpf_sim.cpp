@@ -14,6 +14,7 @@
 
 #include <cstdio>
 #include <set>
+#include <string>
 
 #include "hand_tracking/mpf_tracker.h"
 #include "tracking_eval.h"
@@ -117,28 +118,35 @@ TEST(MpfSim, HeadTurnAndNod) {
   EXPECT_LE(score.hands.mean(), 0.015);  // hands resting on the desk throughout
 }
 
-TEST(MpfSim, FoldedHandsMergeAndSplitWithTheirIdentities) {
-  MpfTracker tracker(MpfParams(), 5);
+// fold_hands: the hands meet, are clasped (one target), and part again, each with its identity.
+struct FoldResult {
   TrackScorer score;
   uint32_t first_id[2] = {0, 0}, last_id[2] = {0, 0};
   int clasped = 0, clasped_one = 0, merges = 0, apart_two = 0, apart = 0;
   double merged_at = -1, split_at = -1;
+};
+
+FoldResult foldHands(bool footprint) {
+  MpfTracker tracker(MpfParams(), 5);
+  FoldResult r;
+  TrackScorer& score = r.score;
   int prev_active = 0;
-  streamSequence("fold_hands", 0, -1, [&](const StreamFrame& f) {
+  const std::string name = footprint ? "fold_hands (footprint volumes)" : "fold_hands";
+  streamSequence(streamParams(footprint), "fold_hands", 0, -1, [&](const StreamFrame& f) {
     const auto& out = tracker.update(*f.skin, *f.body, f.dt);
     score.add(f, out);
-    merges += tracker.lastStats().merges;
+    r.merges += tracker.lastStats().merges;
     const int active = out[1].active + out[2].active;
     const double gap = (f.truth.left - f.truth.right).norm();
     if (gap < 0.06) {
-      ++clasped;
-      clasped_one += active == 1;
+      ++r.clasped;
+      r.clasped_one += active == 1;
     } else if (gap > 0.20) {
-      ++apart;
-      apart_two += active == 2;
+      ++r.apart;
+      r.apart_two += active == 2;
     }
-    if (prev_active == 2 && active == 1 && merged_at < 0) merged_at = f.time;
-    if (prev_active == 1 && active == 2 && merged_at >= 0 && split_at < 0) split_at = f.time;
+    if (prev_active == 2 && active == 1 && r.merged_at < 0) r.merged_at = f.time;
+    if (prev_active == 1 && active == 2 && r.merged_at >= 0 && r.split_at < 0) r.split_at = f.time;
     prev_active = active;
     // Identities per true hand: the active track nearest each hand, at the start and the end.
     if (active == 2 && gap > 0.20)
@@ -147,24 +155,42 @@ TEST(MpfSim, FoldedHandsMergeAndSplitWithTheirIdentities) {
                               (out[2].position - f.truth.hand(h)).norm()
                           ? 1
                           : 2;
-        (merged_at < 0 ? first_id[h] : last_id[h]) = out[i].id;
+        (r.merged_at < 0 ? r.first_id[h] : r.last_id[h]) = out[i].id;
       }
   });
-  score.print("fold_hands");
-  std::printf("[ figures  ] fold_hands: merged at %.2f s, split at %.2f s; one hand target in "
+  score.print(name.c_str());
+  std::printf("[ figures  ] %s: merged at %.2f s, split at %.2f s; one hand target in "
               "%d of %d clasped frames, two in %d of %d frames with the hands > 20 cm apart; "
-              "ids left %u -> %u, right %u -> %u\n", merged_at, split_at, clasped_one, clasped,
-              apart_two, apart, first_id[0], last_id[0], first_id[1], last_id[1]);
-  EXPECT_GE(merges, 1);
-  ASSERT_GT(clasped, 10);
-  EXPECT_GE(clasped_one, clasped * 9 / 10) << "clasped hands must be one target";
-  EXPECT_GE(apart_two, apart * 9 / 10);
-  EXPECT_GT(split_at, merged_at);
-  EXPECT_NE(first_id[0], 0u);
-  EXPECT_NE(first_id[0], first_id[1]);
-  EXPECT_EQ(last_id[0], first_id[0]) << "left hand identity not recovered";
-  EXPECT_EQ(last_id[1], first_id[1]) << "right hand identity not recovered";
-  EXPECT_EQ(score.switches, 0);
+              "ids left %u -> %u, right %u -> %u\n", name.c_str(), r.merged_at, r.split_at,
+              r.clasped_one, r.clasped, r.apart_two, r.apart, r.first_id[0], r.last_id[0],
+              r.first_id[1], r.last_id[1]);
+  EXPECT_GE(r.merges, 1);
+  EXPECT_GE(r.clasped_one, r.clasped * 9 / 10) << "clasped hands must be one target";
+  EXPECT_GE(r.apart_two, r.apart * 9 / 10);
+  EXPECT_GT(r.split_at, r.merged_at);
+  EXPECT_NE(r.first_id[0], 0u);
+  EXPECT_NE(r.first_id[0], r.first_id[1]);
+  EXPECT_EQ(r.last_id[0], r.first_id[0]) << "left hand identity not recovered";
+  EXPECT_EQ(r.last_id[1], r.first_id[1]) << "right hand identity not recovered";
+  return r;
+}
+
+TEST(MpfSim, FoldedHandsMergeAndSplitWithTheirIdentities) {
+  const FoldResult r = foldHands(false);
+  ASSERT_GT(r.clasped, 10);
+  EXPECT_EQ(r.score.switches, 0);
+}
+
+// The same on footprint-filtered volumes (psfs.yaml fusion/*/footprint), where the two hands'
+// estimates met one above the other: the side each hand held at the merge was read from there
+// and the identities came back swapped (62 frames of switches). The side is now the one held
+// while the hands were last clearly apart (Component::apart_offset). What remains are the
+// frames before the split in which the merged target follows the other hand (measured 2; the
+// split waits until the other hand is split_distance away).
+TEST(MpfSim, FoldedHandsKeepTheirIdentitiesOnFootprintVolumes) {
+  const FoldResult r = foldHands(true);
+  ASSERT_GT(r.clasped, 10);
+  EXPECT_LE(r.score.switches, 4);
 }
 
 TEST(MpfSim, HandLeavingTheWorkspaceIsLostAndReacquired) {

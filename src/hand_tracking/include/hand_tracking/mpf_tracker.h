@@ -23,7 +23,7 @@
 // Identities: a track keeps its id for its life. A hand that splits off a merged pair, or is
 // re-found while the other hand stayed tracked, gets its former id back (within
 // identity_memory); after a merge the side it returns on (relative to its partner, as it was
-// when they merged) decides which of the pair gets which id.
+// when the two were last at least split_distance apart) decides which of the pair gets which id.
 //
 // Deterministic: all random numbers come from one seeded std::mt19937_64 and are drawn
 // serially; the parallel part (OpenMP over particles) only evaluates observations, so the
@@ -124,6 +124,11 @@ class MpfTracker {
     double inactive_since = 0;
     int merged_into = -1;
     Eigen::Vector3d merge_offset = Eigen::Vector3d::Zero();  // this - partner, at the merge
+    // this - the other hand, the last frame both were tracked at least split_distance apart
+    // (zero: not yet since this track started). What the merge remembers as this hand's side:
+    // at the merge itself the two estimates are a few cm apart in any direction (clasped hands
+    // lie one above the other), and a side read there swapped the identities at the split.
+    Eigen::Vector3d apart_offset = Eigen::Vector3d::Zero();
   };
 
   void validateInput(const psfs::ProbabilityVolume& skin, const psfs::ProbabilityVolume& body,
@@ -157,6 +162,7 @@ class MpfTracker {
   void reweightClusteredParticles(Reclustering* r);
   void endMergedAndLostTracks(const Reclustering& r);
   void startSplitTracks(const Reclustering& r);
+  void recordHandSides();
   void renormaliseMixture(const Reclustering& r);
   void updateReportedEstimates();
   Eigen::Vector3d refineCentroid(int slot) const;
