@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <functional>
 #include <string>
+#include <utility>
 
 #include "body_tracking/arm_length.h"
 #include "body_tracking/body_parts.h"
@@ -161,25 +163,23 @@ void expectRejected(Params bad, const std::string& key) {
   }
 }
 
+template <class Refinement, class Params>
+void expectLadderChecks(const std::string& prefix, const std::string& frames_key) {
+  const std::pair<std::string, std::function<void(Params*)>> bad[] = {
+      {prefix + "_min", [](Params* p) { p->min = 1.2; }},
+      {prefix + "_max", [](Params* p) { p->max = 0.9; }},
+      {prefix + "_step", [](Params* p) { p->step = 0.0; }},
+      {frames_key, [](Params* p) { p->frames = -1; }}};
+  for (const auto& b : bad) {
+    Params p;
+    b.second(&p);
+    expectRejected<Refinement>(p, b.first);
+  }
+}
+
 TEST(ShapeLadder, BadParametersThrowNamingTheirKey) {
-  ArmLengthParams a;
-  a.max = 0.9;
-  expectRejected<ArmLength>(a, "arm_max");
-  a = ArmLengthParams();
-  a.step = 0.0;
-  expectRejected<ArmLength>(a, "arm_step");
-  a = ArmLengthParams();
-  a.frames = -2;
-  expectRejected<ArmLength>(a, "arm_frames");
-  TrunkGirthParams g;
-  g.min = 1.2;
-  expectRejected<TrunkGirth>(g, "girth_min");
-  g = TrunkGirthParams();
-  g.step = 0.0;
-  expectRejected<TrunkGirth>(g, "girth_step");
-  g = TrunkGirthParams();
-  g.frames = -1;
-  expectRejected<TrunkGirth>(g, "frames");
+  expectLadderChecks<ArmLength, ArmLengthParams>("arm", "arm_frames");
+  expectLadderChecks<TrunkGirth, TrunkGirthParams>("girth", "frames");
 }
 
 }  // namespace
