@@ -105,7 +105,7 @@ void BM_ArmLengthVote(benchmark::State& st) {
   ArmLengthParams ap;
   ap.frames = 1 << 30;
   ArmLength arms(ap);
-  for (auto _ : st) arms.add(papf.observation(), papf.profile(), e.state, e.hands);
+  for (auto _ : st) arms.add(papf.observation(), BodyProfile{}, e.state, e.hands);
   st.counters["voting_arms"] = e.hands.from_skin[0] + e.hands.from_skin[1];
   st.counters["factor"] = arms.factor();
 }

@@ -95,7 +95,7 @@ BodyProfile ArmLength::scaled(const BodyProfile& base, double factor) {
 
 void ArmLength::add(const VolumeObservation& obs, const BodyProfile& base, const BodyState& state,
                     const RefinedHands& hands) {
-  if (!refining()) return;
+  if (!refining() || (!hands.from_skin[0] && !hands.from_skin[1])) return;
   const BodyProfile in_use = scaled(base, factor());
   const BodyFrames tracked = forwardKinematics(in_use, state);
   const BodyParts tracked_parts = buildParts(in_use, tracked);
@@ -121,8 +121,8 @@ void ArmLength::add(const VolumeObservation& obs, const BodyProfile& base, const
         best = std::max(best, armF1(region, occupied, parts, side));
       }
       ladder_.add(k, best);
+      voted = voted || best > 0;  // an arm all of whose poses collide or miss says nothing
     }
-    voted = true;
   }
   if (voted) ladder_.endFrame();
 }

@@ -83,8 +83,11 @@ void Papf::refineShape() {
   profile_ = ArmLength::scaled(girthed, arms_.factor());
   // The reported joints follow the profile in use, so that the frames and profile() drawn
   // together (markers, masks) agree.
-  if (profile_.upper_arm != before.upper_arm || profile_.forearm != before.forearm)
+  if (profile_.upper_arm != before.upper_arm || profile_.forearm != before.forearm) {
     estimate_.frames = forwardKinematics(profile_, estimate_.state);
+    for (int i = 0; i < 2; ++i)  // a hand the skin did not place is the model's
+      if (!estimate_.hands.from_skin[i]) estimate_.hands.position[i] = estimate_.frames.hand[i];
+  }
 }
 
 static_assert(Papf::kPartitions == kPapfPartitions, "scored_parts.h lists the partitions");

@@ -64,7 +64,7 @@ TEST(ArmLength, SettlesOnTheDrawnLengthWithinAWorkingVoxel) {
   const BodyState s = reaching();
   ArmLengthParams p;
   p.frames = 3;
-  for (double truth : {0.88, 1.0, 1.12}) {
+  for (double truth : {0.88, 0.92, 1.0, 1.08, 1.12}) {  // 0.92 / 1.08: the ladder's ends fail
     const Drawn d = drawn(profile, s, truth);
     Eigen::Vector3i v;
     for (int i = 0; i < 2; ++i)  // the test means nothing if a hand is off the grid
@@ -123,12 +123,18 @@ TEST(ArmLength, ThePapfTracksWithTheRefinedArmsAndForgetsThemOnReset) {
   std::printf("[ arms     ] papf: factor %.3f, left hand %.1f mm from the drawn one\n", e.arm_length,
               1e3 * (e.hands.position[0] - d.hands.position[0]).norm());
   EXPECT_NEAR(e.arm_length, 1.12, kTolerance);
+  // The reported joints are those of the profile in use.
+  const BodyFrames now = forwardKinematics(papf.profile(), e.state);
+  for (int i = 0; i < 2; ++i) EXPECT_LT((e.frames.elbow[i] - now.elbow[i]).norm(), 1e-12);
   EXPECT_DOUBLE_EQ(papf.profile().upper_arm, e.arm_length * profile.upper_arm);
   EXPECT_DOUBLE_EQ(papf.profile().forearm, e.arm_length * profile.forearm);
   EXPECT_EQ(papf.profile().chest_half_width, profile.chest_half_width);
   EXPECT_EQ(papf.profile().wrist_to_hand, profile.wrist_to_hand);
   papf.reset();
   EXPECT_EQ(papf.profile().upper_arm, profile.upper_arm);
+  papf.startAt(s);  // a new track reads the length again
+  for (int k = 0; k < 6; ++k) papf.update(d.body, &d.skin);
+  EXPECT_NEAR(papf.estimate().arm_length, 1.12, kTolerance);
   // Off: the profile stays as given.
   PapfParams off;
   off.arm_length.frames = 0;

@@ -236,8 +236,18 @@ void MpfTracker::assignIdentity(int s, const Eigen::Vector3d& at) {
   }
   c.active_since = time_;
   c.merged_into = -1;
-  c.apart_offset.setZero();  // a new pairing: its side is read afresh
-  if (c.type == Target::kHand) comps_[s == 1 ? 2 : 1].apart_offset.setZero();
+  // A new pairing: its sides are read afresh, from here if the two are already clearly apart
+  // (a split happens only then).
+  c.apart_offset.setZero();
+  if (c.type == Target::kHand) {
+    Component& other = comps_[s == 1 ? 2 : 1];
+    other.apart_offset.setZero();
+    const Eigen::Vector3d d = at - other.estimate;
+    if (other.active && d.norm() >= params_.split_distance) {
+      c.apart_offset = d;
+      other.apart_offset = -d;
+    }
+  }
 }
 
 void MpfTracker::activate(int s, const Eigen::Vector3d& at) {

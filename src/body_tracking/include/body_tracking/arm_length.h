@@ -13,9 +13,10 @@
 // On by default: 50 voting frames (PapfParams::arm_length.frames; 0 = the profile's lengths).
 // Measured (docs/benchmarks.md, 2026-12-05): reach_targets, 5 seeds, hands 13.3 -> 11.2 mm
 // median; 10 generated people x 2 seeds, hands median 33.3 -> 27.1 and 35.4 -> 28.6 mm, elbows
-// 47.3 -> 40.4 and 47.5 -> 40.6 mm; the factors read 0.05 long on average (|error| 0.06, as
-// large as the people's spread: a long arm costs less than a short one here). A vote costs
-// 2.8 ms (bench_papf), over the first ~2 s of a track only.
+// 47.3 -> 40.4 and 47.5 -> 40.6 mm; all ten factors read long, by 0.014-0.126 (mean 0.064,
+// as far off as keeping 1: a long arm costs the tracker less than a short one, and the
+// shoulders sit 3-4 cm off there). A vote costs 2.8 ms (bench_papf), over a track's first 50
+// frames with a hand found (~2 s when the hands are in view).
 #pragma once
 
 #include "body_tracking/body_profile.h"

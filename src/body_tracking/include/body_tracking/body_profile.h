@@ -1,8 +1,8 @@
 // The person's measurements: bone lengths and part radii of the quadric body model. Loaded from
 // a YAML body profile (config/body_profile.yaml documents every field); the defaults are the
-// medium-sized adult of the simulated rig (tabletop_sim/body_model.h). The tracker refines the
-// trunk's girth and the arms' length online only when asked (trunk_girth.h, arm_length.h, off
-// by default): give a user of another build their own profile.
+// medium-sized adult of the simulated rig (tabletop_sim/body_model.h). The tracker reads the
+// arms' length online (arm_length.h, on by default) and the trunk's girth when asked
+// (trunk_girth.h, off by default); nothing else: give a user of another build their own profile.
 #pragma once
 
 #include <string>

@@ -12,7 +12,7 @@ namespace body_tracking {
 
 struct LadderParams {
   int frames = 0;  // a track's frames that refine the factor (e.g. 50: 2 s at 25 fps); 0 = off
-  double min = 0.8;  // the ladder: min, min + step, ... <= max, with 1 (the profile) on it
+  double min = 0.8;  // the ladder: 1 (the profile) +- k step, within [min, max]
   double max = 1.4;
   double step = 0.05;
   // Throws std::invalid_argument naming the parameter: `frames_key` for frames,

@@ -372,11 +372,14 @@ class PapfNodelet : public nodelet::Nodelet {
     stat.add("losses", losses_);
     stat.add("time jumps back (started over)", time_jumps_);
     stat.add("papf total (ms)", total_ms_.mean());
-    // The online shape in use (papf.yaml shape/*; 1 = the body profile as given).
-    stat.add("trunk girth factor", papf_->estimate().trunk_girth);
-    stat.add("arm length factor", papf_->estimate().arm_length);
-    stat.add("upper arm, forearm (m)", std::to_string(papf_->profile().upper_arm) + ", " +
-                                           std::to_string(papf_->profile().forearm));
+    // The online shape in use (papf.yaml shape/*; 1 = the body profile as given). The timer may
+    // fire before onInit has built the tracker.
+    if (papf_) {
+      stat.add("trunk girth factor", papf_->estimate().trunk_girth);
+      stat.add("arm length factor", papf_->estimate().arm_length);
+      stat.add("upper arm, forearm (m)", std::to_string(papf_->profile().upper_arm) + ", " +
+                                             std::to_string(papf_->profile().forearm));
+    }
     stat.add("volumes rejected", rejected_);
   }
 
