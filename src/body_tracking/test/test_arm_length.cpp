@@ -89,6 +89,26 @@ TEST(ArmLength, SettlesOnTheDrawnLengthWithinAWorkingVoxel) {
   }
 }
 
+// The same with a one-voxel halo of p = 0.59 around the body, as the pSfS hull has: it must not
+// move the factor. (A halo this even does not tell the weightings apart: p itself passes too. On
+// generated people's volumes p read the arms 0.06-0.11 long, docs/benchmarks.md.)
+TEST(ArmLength, SettlesOnTheDrawnLengthThroughAHalo) {
+  const BodyProfile profile;
+  const BodyState s = reaching();
+  ArmLengthParams p;
+  p.frames = 3;
+  for (double truth : {0.88, 1.0, 1.12}) {
+    Drawn d = drawn(profile, s, truth);
+    test::addHalo(&d.body, 150);
+    VolumeObservation obs;
+    obs.setVolumes(d.body, &d.skin);
+    ArmLength a(p);
+    for (int k = 0; k < 3; ++k) a.add(obs, profile, s, d.hands);
+    std::printf("[ arms     ] drawn %.3f with a halo -> %.3f\n", truth, a.factor());
+    EXPECT_NEAR(a.factor(), truth, kTolerance) << "drawn arm length " << truth;
+  }
+}
+
 TEST(ArmLength, OnlyArmsWithAFoundHandVote) {
   const BodyProfile profile;
   const BodyState s = reaching();
