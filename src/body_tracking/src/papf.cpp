@@ -76,14 +76,14 @@ void Papf::restartShape() {  // a new track, perhaps a new person: the profile a
 void Papf::refineShape() {
   if (!girth_.refining() && !arms_.refining()) return;
   // This frame's pose, tracked with the shape so far, votes; the next frame uses the best.
+  const double arm_factor = arms_.factor();
   girth_.add(observation_, base_profile_, estimate_.state);
   const BodyProfile girthed = TrunkGirth::scaled(base_profile_, girth_.factor());
   arms_.add(observation_, girthed, estimate_.state, estimate_.hands);
-  const BodyProfile before = profile_;
   profile_ = ArmLength::scaled(girthed, arms_.factor());
   // The reported joints follow the profile in use, so that the frames and profile() drawn
-  // together (markers, masks) agree.
-  if (profile_.upper_arm != before.upper_arm || profile_.forearm != before.forearm) {
+  // together (markers, masks) agree; only the arms' length moves a joint.
+  if (arms_.factor() != arm_factor) {
     estimate_.frames = forwardKinematics(profile_, estimate_.state);
     for (int i = 0; i < 2; ++i)  // a hand the skin did not place is the model's
       if (!estimate_.hands.from_skin[i]) estimate_.hands.position[i] = estimate_.frames.hand[i];

@@ -224,8 +224,7 @@ void MpfTracker::endMergedAndLostTracks(const Reclustering& r) {
     int into = r.merged_into_mean[s] >= 0 ? r.slot_of[r.merged_into_mean[s]] : -1;
     if (into >= 0 && !continues[into]) into = -1;
     Eigen::Vector3d side = Eigen::Vector3d::Zero();
-    if (into >= 0)
-      side = c.apart_offset.isZero() ? Eigen::Vector3d(old_estimate[s] - old_estimate[into]) : c.apart_offset;
+    if (into >= 0) side = c.apart_offset.isZero() ? old_estimate[s] - old_estimate[into] : c.apart_offset;
     endTrack(s, into, side);
   }
 }
