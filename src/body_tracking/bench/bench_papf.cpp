@@ -10,6 +10,7 @@
 #include <benchmark/benchmark.h>
 
 #include "body_tracking/arm_length.h"
+#include "body_tracking/model_prior.h"
 #include "body_tracking/papf.h"
 #include "body_tracking/silhouette_mask.h"
 #include "hand_tracking/mpf_tracker.h"
@@ -110,6 +111,24 @@ void BM_ArmLengthVote(benchmark::State& st) {
   st.counters["factor"] = arms.factor();
 }
 BENCHMARK(BM_ArmLengthVote)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// body/volume (model_prior.h): the tracked model as a prior on one 64x64x48 body volume, what
+// the nodelet adds per frame while body/volume has a subscriber.
+void BM_ModelPrior(benchmark::State& st) {
+  const Frames& f = frames();
+  Papf papf(BodyProfile{}, PapfParams{});
+  for (size_t i = 0; i < f.body.size(); ++i) papf.update(f.body[i], &f.skin[i]);
+  const BodyParts parts = buildParts(papf.profile(), papf.estimate().frames);
+  const psfs::ProbabilityVolume& body = f.body.back();
+  psfs::ProbabilityVolume out;
+  for (auto _ : st) {
+    applyModelPrior(body, parts, ModelPriorParams(), &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  st.counters["hull_voxels"] = static_cast<double>(psfs::countAbove(body, 127));
+  st.counters["volume_voxels"] = static_cast<double>(psfs::countAbove(out, 127));
+}
+BENCHMARK(BM_ModelPrior)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace body_tracking

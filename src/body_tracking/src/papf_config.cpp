@@ -1,5 +1,6 @@
 #include "body_tracking/papf_config.h"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace body_tracking {
@@ -54,6 +55,9 @@ void addPapfKeys(PapfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("publish_masks", &c->nodelet.publish_masks)
       .add("mask_margin_px", &c->nodelet.mask_margin_px)
       .add("use_skin_volume", &c->nodelet.use_skin_volume)
+      .add("publish_volume", &c->nodelet.publish_volume)
+      .add("volume_prior/offset", &c->nodelet.volume_prior.offset)
+      .add("volume_prior/falloff", &c->nodelet.volume_prior.falloff)
       .add("queue_size", &c->nodelet.queue_size);
 }
 
@@ -65,6 +69,10 @@ void finishPapfConfig(const std::string& where, PapfConfig* c) {
   }
   if (c->nodelet.world_frame.empty()) throw std::runtime_error(where + "world_frame: must not be empty");
   if (c->nodelet.queue_size < 1) throw std::runtime_error(where + "queue_size: must be >= 1");
+  if (!(std::abs(c->nodelet.volume_prior.offset) <= 0.1))
+    throw std::runtime_error(where + "volume_prior/offset: must be in [-0.1, 0.1] m");
+  if (!(c->nodelet.volume_prior.falloff > 0 && c->nodelet.volume_prior.falloff <= 0.1))
+    throw std::runtime_error(where + "volume_prior/falloff: must be in (0, 0.1] m");
   if (!(c->nodelet.mask_margin_px >= 0 && c->nodelet.mask_margin_px <= 50))
     throw std::runtime_error(where + "mask_margin_px: must be in [0, 50]");
 }

@@ -90,6 +90,37 @@ TEST(PapfPipeline, TracksTheSimulatedPersonAndPublishesItsOutputs) {
   auto s3 = nh.subscribe<sensor_msgs::JointState>("/tabletop/body/joint_states", 300, on_joints);
   auto s4 = nh.subscribe<visualization_msgs::MarkerArray>("/tabletop/body/markers", 300, on_markers);
   auto s5 = nh.subscribe<sensor_msgs::Image>("/tabletop/cam0/body_mask", 300, on_mask);
+  // body/volume against the psfs/body_volume of the same stamp (which psfs publishes first):
+  // the same grid, no voxel raised, fewer occupied voxels once a pose is tracked.
+  std::map<ros::Time, tabletop_msgs::VoxelVolume::ConstPtr> hulls;
+  size_t volumes = 0, compared = 0, same_grid = 0, raised = 0, thinner = 0;
+  boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_hull =
+      [&](const tabletop_msgs::VoxelVolume::ConstPtr& v) {
+        std::lock_guard<std::mutex> l(m);
+        hulls[v->header.stamp] = v;
+        while (hulls.size() > 20) hulls.erase(hulls.begin());
+      };
+  boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_volume =
+      [&](const tabletop_msgs::VoxelVolume::ConstPtr& v) {
+        std::lock_guard<std::mutex> l(m);
+        ++volumes;
+        const auto h = hulls.find(v->header.stamp);
+        if (h == hulls.end()) return;
+        ++compared;
+        const tabletop_msgs::VoxelVolume& a = *h->second;
+        if (a.size_x != v->size_x || a.size_y != v->size_y || a.size_z != v->size_z ||
+            a.voxel_size != v->voxel_size || a.data.size() != v->data.size())
+          return;
+        ++same_grid;
+        size_t in_hull = 0, in_volume = 0;
+        for (size_t i = 0; i < a.data.size(); ++i) {
+          raised += v->data[i] > a.data[i];
+          in_hull += a.data[i] > 127, in_volume += v->data[i] > 127;
+        }
+        thinner += in_volume < in_hull;
+      };
+  auto s6 = nh.subscribe<tabletop_msgs::VoxelVolume>("/tabletop/psfs/body_volume", 300, on_hull);
+  auto s7 = nh.subscribe<tabletop_msgs::VoxelVolume>("/tabletop/body/volume", 300, on_volume);
   tabletop_common::test_support::DiagnosticsValues diag("papf body tracking");
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
@@ -137,6 +168,13 @@ TEST(PapfPipeline, TracksTheSimulatedPersonAndPublishesItsOutputs) {
   std::printf("[papf] %zu cam0 masks, up to %zu pixels\n", masks, mask_pixels);
   EXPECT_GE(masks, size_t(valid) / 2);
   EXPECT_GT(mask_pixels, 2000u);
+  std::printf("[papf] body/volume: %zu published, %zu compared with psfs/body_volume, %zu with "
+              "fewer occupied voxels\n", volumes, compared, thinner);
+  EXPECT_GE(volumes, size_t(kFrames - kEmpty));
+  EXPECT_GE(compared, size_t(valid) / 2);
+  EXPECT_EQ(same_grid, compared);
+  EXPECT_EQ(raised, 0u);
+  EXPECT_GE(thinner, compared * 9 / 10);  // the hull's halo and phantom wedges go
   EXPECT_TRUE(tf_buffer.canTransform("world", "tabletop/body/chest", ros::Time(0)));
   EXPECT_TRUE(tf_buffer.canTransform("world", "tabletop/body/left_hand", ros::Time(0)));
   ASSERT_TRUE(diag.has("volumes rejected"));

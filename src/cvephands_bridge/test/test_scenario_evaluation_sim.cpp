@@ -72,6 +72,29 @@ TEST(ScenarioEvaluationSim, BodyVolumeOverlapsTheOracleAndIoUAgreesWithPrecision
   }
 }
 
+// body/volume (the pSfS body volume with the PAPF's model as a prior, model_prior.h): the
+// prior only ever lowers a probability, so no true voxel the hull missed comes back (recall
+// cannot rise) and what it removes is the hull's phantom volume around the person: IoU rises.
+TEST(ScenarioEvaluationSim, BodyVolumeWithTheModelPriorLosesPhantomVolume) {
+  const auto& r = defaultRun();
+  ASSERT_TRUE(r.body.ran);
+  EXPECT_EQ(r.body.volume_iou.count(), 30u);
+  for (const auto& f : r.frames) {
+    if (!f.person) {
+      EXPECT_TRUE(std::isnan(f.body_volume_iou));
+      continue;
+    }
+    EXPECT_LE(f.body_volume_recall, f.body_recall + 1e-12) << "frame " << f.frame;
+    EXPECT_NEAR(f.body_volume_iou,
+                1.0 / (1.0 / f.body_volume_precision + 1.0 / f.body_volume_recall - 1.0), 1e-9);
+  }
+  std::printf("[ figures ] body IoU %.3f (precision %.3f, recall %.3f); body/volume %.3f (%.3f, %.3f)\n",
+              r.body_iou.mean(), r.body_precision.mean(), r.body_recall.mean(),
+              r.body.volume_iou.mean(), r.body.volume_precision.mean(), r.body.volume_recall.mean());
+  EXPECT_GT(r.body.volume_precision.mean(), r.body_precision.mean() + 0.05);
+  EXPECT_GT(r.body.volume_iou.mean(), r.body_iou.mean());
+}
+
 TEST(ScenarioEvaluationSim, EmptySceneHasNoFalseTargetAndHandsAndHeadAreTrackedWithin30mm) {
   const auto& r = defaultRun();
   // Nothing in the workspace after the background was learned: nothing to reconstruct, no target.
@@ -192,6 +215,8 @@ TEST(ScenarioEvaluationSim, PapfOnTheSameVolumesGivesFiniteBodyErrorsWithinPhysi
   EXPECT_TRUE(std::isnan(n.body.trackedFraction()));
   EXPECT_TRUE(std::isnan(n.body.meanError(n.body.head_mm)));
   EXPECT_TRUE(std::isnan(n.body.meanError(n.body.upper_arm_deg)));
+  EXPECT_EQ(n.body.volume_iou.count(), 0u);
+  for (const auto& f : n.frames) EXPECT_TRUE(std::isnan(f.body_volume_iou));
   EXPECT_EQ(n.handErrorMeanMm(0), r.handErrorMeanMm(0));
   EXPECT_EQ(n.headErrorMeanMm(), r.headErrorMeanMm());
   EXPECT_EQ(n.body_iou.mean(), r.body_iou.mean());

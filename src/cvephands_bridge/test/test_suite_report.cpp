@@ -50,6 +50,7 @@ ScenarioFigures good(const std::string& name) {
   f.body_upper_arm_deg = 8, f.body_forearm_deg = 11, f.body_elbow_flex_deg = 9;
   f.body_tracked_fraction = 1.0, f.body_untracked_frames = 0, f.body_starts = 1;
   f.body_restarts = 0, f.body_losses = 0, f.body_false_frames_empty = 0, f.papf_ms = 25;
+  f.body_volume_iou = 0.78, f.body_volume_precision = 0.85, f.body_volume_recall = 0.90;
   return f;
 }
 
@@ -252,6 +253,7 @@ TEST(SuiteBody, BodyMeasuresAggregateMedianAndWorstDecileWithMissingAndNeverTrac
   off.body_upper_arm_deg = off.body_forearm_deg = off.body_elbow_flex_deg = kNaN;
   off.body_tracked_fraction = off.body_untracked_frames = off.body_starts = kNaN;
   off.body_restarts = off.body_losses = off.body_false_frames_empty = off.papf_ms = kNaN;
+  off.body_volume_iou = off.body_volume_precision = off.body_volume_recall = kNaN;
   EXPECT_FALSE(off.bodyRan());
   EXPECT_TRUE(off.ran());
   s.push_back(off);
@@ -280,23 +282,27 @@ TEST(SuiteBody, BodyMeasuresAggregateMedianAndWorstDecileWithMissingAndNeverTrac
   // design bars nor asserted regression guards beyond what regressionBars() lists.
   for (const std::string& k : cvephands::bodyMeasureKeys()) EXPECT_NO_THROW(cvephands::measureDef(k));
   const BarSet ref = cvephands::bodyReferenceBars();
-  ASSERT_EQ(ref.bars.size(), 3u);
+  ASSERT_EQ(ref.bars.size(), 5u);
   EXPECT_EQ(cvephands::describeBar(ref.bars[0]), "PAPF hands vs palm + fingers centroid median <= 16.0 mm");
+  EXPECT_EQ(cvephands::describeBar(ref.bars[4]), "body IoU, body/volume (model prior) worst decile >= 0.650");
+  EXPECT_DOUBLE_EQ(summaryOf(sums, "body_volume_iou").median, 0.78);
+  EXPECT_EQ(summaryOf(sums, "body_volume_iou").count, 10);
   const std::vector<std::string> keys = cvephands::bodyMeasureKeys();
   for (const Bar& b : cvephands::designBars().bars)
     EXPECT_EQ(std::find(keys.begin(), keys.end(), b.key), keys.end()) << b.key;
   EXPECT_THROW(cvephands::barSetByName("issue16"), std::invalid_argument);
-  // The regression set: loose floors on three PAPF medians when it ran, none without it.
+  // The regression set: loose floors on three PAPF medians and on body/volume's IoU (median and
+  // worst decile) when it ran, none without it.
   int floors = 0;
   for (const Bar& b : cvephands::regressionBars(true).bars)
     if (std::find(keys.begin(), keys.end(), b.key) != keys.end()) {
       ++floors;
-      EXPECT_EQ(b.statistic, Statistic::kMedian) << b.key;
+      if (b.key != "body_volume_iou") EXPECT_EQ(b.statistic, Statistic::kMedian) << b.key;
     }
-  EXPECT_EQ(floors, 3);
+  EXPECT_EQ(floors, 5);
   for (const Bar& b : cvephands::regressionBars(false).bars)
     EXPECT_EQ(std::find(keys.begin(), keys.end(), b.key), keys.end()) << b.key;
-  EXPECT_EQ(cvephands::regressionBars(false).bars.size() + 3, cvephands::regressionBars().bars.size());
+  EXPECT_EQ(cvephands::regressionBars(false).bars.size() + 5, cvephands::regressionBars().bars.size());
 }
 
 TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
@@ -307,10 +313,10 @@ TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
   cvephands::ReportContext c;
   const std::string md = cvephands::markdownReport(s, cvephands::summarize(s), c);
   EXPECT_NE(md.find("## Upper body (PAPF)"), std::string::npos) << md;
-  EXPECT_NE(md.find("| default | all | 1.000 | 0 | 1 | 0 | 0 | 20.0 | 60.0 | 12.0 | 25.0 | 35.0 | 30.0 | "
+  EXPECT_NE(md.find("| default | all | 0.780 | 1.000 | 0 | 1 | 0 | 0 | 20.0 | 60.0 | 12.0 | 25.0 | 35.0 | 30.0 | "
                     "8.0 | 11.0 | 9.0 | 25.0 |"),
             std::string::npos) << md;
-  EXPECT_NE(md.find("| random-7 | all | 0.500 | 50 | 4 | 0 | 0 | 250.0 | 60.0 | never |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| random-7 | all | 0.780 | 0.500 | 50 | 4 | 0 | 0 | 250.0 | 60.0 | never |"), std::string::npos) << md;
   EXPECT_NE(md.find("| random-8 | all | - |"), std::string::npos);
   EXPECT_NE(md.find("Over 2 scenarios with the PAPF"), std::string::npos) << md;
   // Suite statistics of the body measures (2 values: median = their mean, worst = worst decile).
@@ -331,6 +337,7 @@ TEST(SuiteBody, MarkdownHasTheUpperBodySectionOrSaysThePapfDidNotRun) {
     f.body_hand_mm = f.body_head_mm = f.body_elbow_mm = f.body_shoulder_mm = kNaN;
     f.body_upper_arm_deg = f.body_forearm_deg = f.body_elbow_flex_deg = kNaN;
     f.body_tracked_fraction = kNaN;
+    f.body_volume_iou = f.body_volume_precision = f.body_volume_recall = kNaN;
   }
   c.asserted = "regression";
   const std::string off = cvephands::markdownReport(s, cvephands::summarize(s), c);

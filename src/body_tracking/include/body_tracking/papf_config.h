@@ -7,6 +7,7 @@
 #include <string>
 
 #include "body_tracking/body_profile.h"
+#include "body_tracking/model_prior.h"
 #include "body_tracking/papf_params.h"
 #include "tabletop_common/config_schema.h"
 
@@ -20,6 +21,10 @@ struct PapfNodeletOptions {
   bool publish_masks = true;     // cam<i>/body_mask (mono8): the model's silhouettes
   double mask_margin_px = 4.0;   // dilation of those masks (px)
   bool use_skin_volume = true;   // false: the body volume alone (head and hands unweighted)
+  // body/volume: psfs/body_volume with the tracked model as a prior (model_prior.h); the input
+  // volume unchanged while no pose is tracked.
+  bool publish_volume = true;
+  ModelPriorParams volume_prior;
   // Volumes waiting for the tracker. Live, a tracker slower than the cameras then drops the
   // oldest instead of lagging; offline (every set counts) launch files set it very large.
   int queue_size = 10;

@@ -6,6 +6,9 @@
 //                      psfs can take as its hand ROIs instead of hands/targets (its hand_roi
 //                      topic parameter)
 //   body/markers       visualization_msgs/MarkerArray: the quadrics and a stick skeleton
+//   body/volume        tabletop_msgs/VoxelVolume: psfs/body_volume with the tracked model as a
+//                      prior (model_prior.h), less its phantom volume; the input unchanged
+//                      while no pose is tracked (optional, publish_volume)
 //   <camera>/body_mask sensor_msgs/Image mono8: the model's silhouettes, dilated (optional)
 //   tf                 <tf_prefix><part> for each body part
 // A thin wrapper around body_tracking::Papf. Parameters: ~config_file (default
@@ -32,6 +35,7 @@
 #include <tabletop_msgs/TrackedTargets.h>
 #include <tabletop_msgs/VoxelVolume.h>
 
+#include "body_tracking/model_prior.h"
 #include "body_tracking/papf.h"
 #include "body_tracking/papf_config.h"
 #include "body_tracking/silhouette_mask.h"
@@ -101,6 +105,7 @@ class PapfNodelet : public nodelet::Nodelet {
     joints_pub_ = nh.advertise<sensor_msgs::JointState>("body/joint_states", 5);
     targets_pub_ = nh.advertise<tabletop_msgs::TrackedTargets>("body/hand_targets", 5);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("body/markers", 2);
+    if (cfg_.nodelet.publish_volume) volume_pub_ = nh.advertise<tabletop_msgs::VoxelVolume>("body/volume", 2);
     tf_ = std::make_unique<tf2_ros::TransformBroadcaster>();
     // getNodeHandle(): this nodelet's callbacks run one at a time in arrival order, so the
     // volumes of a set (body, then skin) pair up and sets are tracked in stamp order.
@@ -330,6 +335,16 @@ class PapfNodelet : public nodelet::Nodelet {
     markers_pub_.publish(markers);
     if (!tfs.empty()) tf_->sendTransform(tfs);
     if (e.tracking && cfg_.nodelet.publish_masks) publishMasks(pose_msg->header, parts);
+    if (cfg_.nodelet.publish_volume && volume_pub_.getNumSubscribers() > 0) {
+      const psfs::ProbabilityVolume* v = &body_;
+      if (e.tracking) {
+        applyModelPrior(body_, parts, cfg_.nodelet.volume_prior, &prior_volume_);
+        v = &prior_volume_;
+      }
+      auto msg = boost::make_shared<tabletop_msgs::VoxelVolume>();
+      psfs::toVoxelVolumeMsg(*v, stamp, world, msg.get());
+      volume_pub_.publish(msg);
+    }
   }
 
   void publishMasks(const std_msgs::Header& header, const BodyParts& parts) {
@@ -396,14 +411,14 @@ class PapfNodelet : public nodelet::Nodelet {
   std::string reported_gpu_warning_;
   std::string fatal_;
   ros::Subscriber body_sub_, skin_sub_, frames_sub_;
-  ros::Publisher pose_pub_, joints_pub_, targets_pub_, markers_pub_;
+  ros::Publisher pose_pub_, joints_pub_, targets_pub_, markers_pub_, volume_pub_;
   std::vector<ros::Publisher> mask_pubs_;
   std::vector<std::unique_ptr<SilhouetteProjector>> projectors_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_;
   std::unique_ptr<tabletop_common::PeriodicDiagnostics> diag_;
   std::mutex mutex_, camera_mutex_;
   psfs::VolumePairing pairing_;
-  psfs::ProbabilityVolume skin_, body_;
+  psfs::ProbabilityVolume skin_, body_, prior_volume_;
   ros::Time last_stamp_;
   bool was_tracking_ = false;
   tabletop_common::RateMeter rate_;

@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "body_tracking/model_prior.h"
 #include "body_tracking/papf.h"
 #include "body_tracking/papf_config.h"
 #include "hand_tracking/mpf_config.h"
@@ -220,6 +221,7 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
   // The PAPF: its file's parameters, the scenario's seed (same options, same figures).
   std::unique_ptr<body_tracking::Papf> papf;
   bool papf_skin = true;
+  body_tracking::ModelPriorParams volume_prior;  // the nodelet's body/volume
   if (o.body) {
     body_tracking::PapfConfig pc;
     if (!o.papf_config.empty()) pc = body_tracking::loadPapfConfig(o.papf_config);
@@ -230,7 +232,9 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
             : body_tracking::BodyProfile::fromYamlFile(pc.nodelet.body_profile_file);
     papf = std::make_unique<body_tracking::Papf>(profile, pc.params);
     papf_skin = pc.nodelet.use_skin_volume;
+    volume_prior = pc.nodelet.volume_prior;
   }
+  psfs::ProbabilityVolume prior_volume;  // body/volume of the frame
   HandMeshEvalOptions mo = o.mesh;
   mo.seed = static_cast<int>(o.seed);  // truth surface samples
   HandMeshScorer scorer(mo);
@@ -289,6 +293,13 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
         res.body.papf_ms.add(sf.papf_ms);
         scoreBody(e, g, body_was_tracking, &res.body, &sf);
         body_was_tracking = e.tracking;
+        if (g.person_present) {
+          if (e.tracking)
+            body_tracking::applyModelPrior(r.body, body_tracking::buildParts(papf->profile(), e.frames),
+                                           volume_prior, &prior_volume);
+          else
+            prior_volume = r.body;
+        }
       }
       if (res.grid.empty()) res.grid = r.body.grid.describe();
       if (r.body.grid != r.skin.grid)
@@ -319,6 +330,16 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
           (k == 0 ? sf.body_voxels : sf.skin_voxels) = ov.reconstructed;
         }
         res.body_iou.add(sf.body_iou);
+        if (papf) {
+          tv.data = truth_body;
+          sf.body_volume_iou = psfs::volumeIoU(prior_volume, tb, tv, 0);
+          const Overlap ov = overlap(prior_volume, tb, truth_body);
+          sf.body_volume_precision = ov.precision();
+          sf.body_volume_recall = ov.recall();
+          res.body.volume_iou.add(sf.body_volume_iou);
+          if (std::isfinite(sf.body_volume_precision)) res.body.volume_precision.add(sf.body_volume_precision);
+          if (std::isfinite(sf.body_volume_recall)) res.body.volume_recall.add(sf.body_volume_recall);
+        }
         res.skin_iou.add(sf.skin_iou);
         // Precision of an empty reconstruction / recall of an empty truth: undefined, skipped.
         if (std::isfinite(sf.body_precision)) res.body_precision.add(sf.body_precision);

@@ -177,18 +177,20 @@ bool writeFramesCsv(const std::string& path, const cvephands::ScenarioEvalResult
   out << "frame,time_s,person,body_iou,body_precision,body_recall,skin_iou,skin_precision,"
          "skin_recall,body_voxels,skin_voxels,active_targets,psfs_ms,mpf_ms,papf_tracking,"
          "papf_started,papf_hand_mm,papf_head_mm,papf_elbow_mm,papf_shoulder_mm,papf_ms,"
-         "papf_upper_arm_deg,papf_forearm_deg,papf_elbow_flex_deg\n";
+         "papf_upper_arm_deg,papf_forearm_deg,papf_elbow_flex_deg,body_volume_iou,"
+         "body_volume_precision,body_volume_recall\n";
   char buf[512];
   for (const cvephands::ScenarioFrame& f : r.frames) {
     std::snprintf(buf, sizeof(buf),
                   "%d,%.3f,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%d,%.2f,%.3f,%d,%d,%.1f,%.1f,%.1f,%.1f,%.2f,"
-                  "%.1f,%.1f,%.1f\n",
+                  "%.1f,%.1f,%.1f,%.4f,%.4f,%.4f\n",
                   f.frame, f.time, f.person ? 1 : 0, f.body_iou, f.body_precision, f.body_recall,
                   f.skin_iou, f.skin_precision, f.skin_recall, f.body_voxels, f.skin_voxels,
                   f.active_targets, f.psfs_ms, f.mpf_ms, f.body_tracking ? 1 : 0,
                   f.body_started ? 1 : 0, f.body_hand_mm, f.body_head_mm, f.body_elbow_mm,
                   f.body_shoulder_mm, f.papf_ms, f.body_upper_arm_deg, f.body_forearm_deg,
-                  f.body_elbow_flex_deg);
+                  f.body_elbow_flex_deg, f.body_volume_iou, f.body_volume_precision,
+                  f.body_volume_recall);
     out << buf;
   }
   return bool(out);
@@ -320,7 +322,8 @@ int main(int argc, char** argv) {
           << "\nvs the palm + fingers centroid:\n" << r.tracking_palm.summary();
       std::string papf;
       if (f.bodyRan())
-        papf = "; PAPF tracked " + cvephands::formatValue(f.body_tracked_fraction, 2) + ", hands " +
+        papf = "; body/volume IoU " + cvephands::formatValue(f.body_volume_iou, 3) +
+               ", PAPF tracked " + cvephands::formatValue(f.body_tracked_fraction, 2) + ", hands " +
                cvephands::formatValue(f.body_hand_mm, 1) + ", head " +
                cvephands::formatValue(f.body_head_mm, 1) + ", elbows " +
                cvephands::formatValue(f.body_elbow_mm, 1) + ", shoulders " +

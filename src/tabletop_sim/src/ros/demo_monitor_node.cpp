@@ -3,7 +3,8 @@
 // summary (frames, rate, end-to-end latency, per-stage times from /diagnostics). When the pSfS
 // stage runs it also scores psfs/body_volume and psfs/skin_volume against the simulated rig's
 // oracle volumes (ground_truth/*_volume, same stamps) and writes volumes.png: the latest
-// reconstruction beside the truth as top, front and side projections. When a hand tracker
+// reconstruction beside the truth as top, front and side projections; body/volume (the body
+// tracker's body volume with its model as a prior) is scored the same way. When a hand tracker
 // publishes hands/targets, its targets are scored against ground_truth/targets (same stamps)
 // with TrackingEvaluator: errors, losses, identity switches in the summary and
 // tracking_error.png. When the body tracker publishes body/pose, its head, hands, elbows and
@@ -101,13 +102,14 @@ class DemoMonitor {
           };
       processed_sub_ = nh_.subscribe<std_msgs::Header>("psfs/processed", 1000, on_processed);
     }
-    for (int k = 0; k < 2; ++k) {
-      const std::string kind = k == 0 ? "body" : "skin";
+    for (int k = 0; k < kVolumeKinds; ++k) {
+      const std::string kind = k == 1 ? "skin" : "body";
       boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_rec =
           [this, k](const tabletop_msgs::VoxelVolume::ConstPtr& m) { onVolume(k, false, m); };
       boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_truth =
           [this, k](const tabletop_msgs::VoxelVolume::ConstPtr& m) { onVolume(k, true, m); };
-      volume_subs_.push_back(nh_.subscribe<tabletop_msgs::VoxelVolume>("psfs/" + kind + "_volume", 300, on_rec));
+      volume_subs_.push_back(nh_.subscribe<tabletop_msgs::VoxelVolume>(
+          k == 2 ? std::string("body/volume") : "psfs/" + kind + "_volume", 300, on_rec));
       volume_subs_.push_back(
           nh_.subscribe<tabletop_msgs::VoxelVolume>("ground_truth/" + kind + "_volume", 8, on_truth));
     }
@@ -270,7 +272,8 @@ class DemoMonitor {
     auto& mine = truth ? truth_volumes_[kind] : recon_volumes_[kind];
     auto& other = truth ? recon_volumes_[kind] : truth_volumes_[kind];
     if (!truth) ++volumes_received_[kind];
-    if (!truth && digests_) digest_[{pass_, msg->header.stamp}][kind == 0 ? "body" : "skin"] = crcOf(msg->data);
+    if (!truth && digests_ && kind < 2)
+      digest_[{pass_, msg->header.stamp}][kind == 0 ? "body" : "skin"] = crcOf(msg->data);
     auto it = other.find(msg->header.stamp);
     if (it == other.end()) {
       mine[msg->header.stamp] = msg;
@@ -408,14 +411,17 @@ class DemoMonitor {
                     body_err_[1].mean(), body_err_[2].mean(), body_err_[3].mean());
       s << buf;
     }
-    for (int k = 0; k < 2; ++k) {
-      const char* kind = k == 0 ? "body" : "skin";
+    for (int k = 0; k < kVolumeKinds; ++k) {
+      const char* kind = k == 0 ? "body" : k == 1 ? "skin" : "body/volume";
+      const char* label = k == 0   ? "body volume IoU       "
+                          : k == 1 ? "skin volume IoU       "
+                                   : "body/volume IoU       ";  // the model prior's
       if (iou_[k].count() > 0) {
         std::snprintf(buf, sizeof(buf),
-                      "%s volume IoU        mean %.3f, min %.3f over %llu frames (vs the oracle, "
-                      "p > %.2f)\n",
-                      kind, iou_[k].mean(), iou_[k].min(),
-                      static_cast<unsigned long long>(iou_[k].count()), threshold_byte_ / 255.0);
+                      "%s mean %.3f, min %.3f over %llu frames (vs the oracle, p > %.2f)%s\n",
+                      label, iou_[k].mean(), iou_[k].min(),
+                      static_cast<unsigned long long>(iou_[k].count()), threshold_byte_ / 255.0,
+                      k == 2 ? "; the body tracker's model as a prior on the body volume" : "");
         s << buf;
       } else if (volumes_received_[k] > 0) {
         s << kind << " volumes          " << volumes_received_[k]
@@ -762,14 +768,17 @@ class DemoMonitor {
   std::map<ros::Time, bool> truth_;
   std::map<ros::Time, tabletop_msgs::TrackedTargets::ConstPtr> truth_msgs_;
   std::map<std::string, std::map<std::string, std::string>> stages_;
-  // [0] body, [1] skin: unpaired volumes by stamp, IoU so far, the last scored pair.
+  // [0] psfs/body_volume, [1] psfs/skin_volume, [2] body/volume (the body tracker's, scored
+  // against the body oracle): unpaired volumes by stamp, IoU so far, the last scored pair.
+  static constexpr int kVolumeKinds = 3;
   std::vector<ros::Subscriber> volume_subs_;
   uint8_t threshold_byte_ = 191;
-  std::map<ros::Time, tabletop_msgs::VoxelVolume::ConstPtr> recon_volumes_[2], truth_volumes_[2];
-  tabletop_common::RunningStats iou_[2];
-  uint64_t volumes_received_[2] = {0, 0};
+  std::map<ros::Time, tabletop_msgs::VoxelVolume::ConstPtr> recon_volumes_[kVolumeKinds],
+      truth_volumes_[kVolumeKinds];
+  tabletop_common::RunningStats iou_[kVolumeKinds];
+  uint64_t volumes_received_[kVolumeKinds] = {0, 0, 0};
   bool grid_mismatch_ = false;
-  std::pair<tabletop_msgs::VoxelVolume::ConstPtr, tabletop_msgs::VoxelVolume::ConstPtr> scored_[2];
+  std::pair<tabletop_msgs::VoxelVolume::ConstPtr, tabletop_msgs::VoxelVolume::ConstPtr> scored_[kVolumeKinds];
 };
 
 }  // namespace tabletop_sim

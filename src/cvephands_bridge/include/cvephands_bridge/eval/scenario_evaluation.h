@@ -108,6 +108,12 @@ struct ScenarioFrame {
   double body_upper_arm_deg = std::numeric_limits<double>::quiet_NaN(),
          body_forearm_deg = std::numeric_limits<double>::quiet_NaN(),
          body_elbow_flex_deg = std::numeric_limits<double>::quiet_NaN();
+  // The body volume the body tracker publishes (body/volume: the pSfS body volume with the
+  // tracked model as a prior, body_tracking/model_prior.h; the pSfS volume itself where no
+  // pose is tracked) vs the oracle, as body_iou; NaN in empty frames or with the body off.
+  double body_volume_iou = std::numeric_limits<double>::quiet_NaN(),
+         body_volume_precision = std::numeric_limits<double>::quiet_NaN(),
+         body_volume_recall = std::numeric_limits<double>::quiet_NaN();
   double papf_ms = 0;
 };
 
@@ -136,6 +142,8 @@ struct BodyTrackingFigures {
   // Per-sample arm angle errors (degrees, armAngleErrors), both sides pooled.
   tabletop_common::RunningStats upper_arm_deg, forearm_deg, elbow_flex_deg;
   tabletop_common::RunningStats papf_ms;  // per update, all scored frames
+  // ScenarioFrame::body_volume_* over the person frames.
+  tabletop_common::RunningStats volume_iou, volume_precision, volume_recall;
 
   // Person frames without a pose reported (the track not started yet, or lost).
   int untrackedFrames() const { return person_frames - tracked_frames; }

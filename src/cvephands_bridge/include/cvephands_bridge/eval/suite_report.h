@@ -52,6 +52,9 @@ struct ScenarioFigures {
   double body_tracked_fraction = kNaN, body_untracked_frames = kNaN, body_starts = kNaN,
          body_restarts = kNaN, body_losses = kNaN, body_false_frames_empty = kNaN;
   double papf_ms = kNaN;
+  // body/volume (the pSfS body volume with the tracked model as a prior) vs the oracle, as
+  // body_iou / body_precision / body_recall.
+  double body_volume_iou = kNaN, body_volume_precision = kNaN, body_volume_recall = kNaN;
   bool bodyRan() const { return ran() && !std::isnan(body_tracked_fraction); }
 
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();

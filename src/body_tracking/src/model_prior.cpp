@@ -1,0 +1,78 @@
+#include "body_tracking/model_prior.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+namespace body_tracking {
+
+using Eigen::Vector3d;
+
+namespace {
+
+// q: the point in the part's local frame (a cylinder's axis along +y from 0).
+double localSignedDistance(const TruncatedQuadric& part, const Vector3d& q) {
+  if (part.shape == TruncatedQuadric::Shape::CYLINDER) {
+    const double r = std::hypot(q.x(), q.z());
+    const double n = std::hypot(q.x() / part.semi.x(), q.z() / part.semi.z());  // 1 on the surface
+    const double radial = n > 0 ? r * (1.0 - 1.0 / n) : -std::min(part.semi.x(), part.semi.z());
+    const double axial = std::max(-q.y(), q.y() - part.length);  // > 0 beyond a cap
+    if (radial > 0 && axial > 0) return std::hypot(radial, axial);  // off the rim
+    return std::max(radial, axial);
+  }
+  const double r = q.norm();
+  const double n = q.cwiseQuotient(part.semi).norm();
+  return n > 0 ? r * (1.0 - 1.0 / n) : -part.semi.minCoeff();
+}
+
+}  // namespace
+
+double signedDistance(const TruncatedQuadric& part, const Vector3d& p) {
+  return localSignedDistance(part, part.frame.inverse() * p);
+}
+
+void applyModelPrior(const psfs::ProbabilityVolume& body, const BodyParts& parts,
+                     const ModelPriorParams& params, psfs::ProbabilityVolume* out) {
+  if (!out || out == &body) throw std::invalid_argument("applyModelPrior: out must be another volume");
+  if (!std::isfinite(params.offset) || !std::isfinite(params.falloff) || !(params.falloff > 0))
+    throw std::invalid_argument("applyModelPrior: offset must be finite and falloff > 0");
+  const psfs::VoxelGrid& g = body.grid;
+  out->grid = g;
+  out->data.assign(body.data.size(), 0);
+  // Beyond this distance even p = 254.5/255 maps below 0.5/255:
+  // logit(254.5/255) + logit(1 - 0.5/255) = 2 ln(509) units of log-odds.
+  const double reach = params.offset + 2.0 * std::log(509.0) * params.falloff;
+  // Nearest part's distance per voxel, part by part within its box grown by `reach` (a few
+  // thousand voxels each, where the whole grid holds ~200 000).
+  std::vector<float> dist(body.data.size(), std::numeric_limits<float>::infinity());
+  for (const TruncatedQuadric& part : parts) {
+    const Eigen::Isometry3d to_local = part.frame.inverse();
+    Eigen::Vector3i lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, int(std::floor((part.bounds.min()[a] - reach - g.origin[a]) / g.voxel_size)));
+      hi[a] = std::min(g.dims[a] - 1, int(std::floor((part.bounds.max()[a] + reach - g.origin[a]) / g.voxel_size)));
+    }
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          const size_t i = g.index(x, y, z);
+          dist[i] = std::min(dist[i], float(localSignedDistance(part, to_local * g.centre(x, y, z))));
+        }
+  }
+  for (size_t i = 0; i < body.data.size(); ++i) {
+    const uint8_t v = body.data[i];
+    const double penalty = (double(dist[i]) - params.offset) / params.falloff;  // +inf: no part near
+    if (!(penalty > 0)) {
+      out->data[i] = v;
+      continue;
+    }
+    if (v == 0 || std::isinf(penalty)) continue;  // stays 0
+    const double pv = std::min(double(v), 254.5) / 255.0;
+    const double l = std::log(pv / (1.0 - pv)) - penalty;
+    out->data[i] = static_cast<uint8_t>(std::lround(255.0 / (1.0 + std::exp(-l))));
+  }
+}
+
+}  // namespace body_tracking
