@@ -8,46 +8,25 @@
 
 namespace body_tracking {
 
-using Eigen::Vector3d;
-
-namespace {
-
-// q: the point in the part's local frame (a cylinder's axis along +y from 0).
-double localSignedDistance(const TruncatedQuadric& part, const Vector3d& q) {
-  if (part.shape == TruncatedQuadric::Shape::CYLINDER) {
-    const double r = std::hypot(q.x(), q.z());
-    const double n = std::hypot(q.x() / part.semi.x(), q.z() / part.semi.z());  // 1 on the surface
-    const double radial = n > 0 ? r * (1.0 - 1.0 / n) : -std::min(part.semi.x(), part.semi.z());
-    const double axial = std::max(-q.y(), q.y() - part.length);  // > 0 beyond a cap
-    if (radial > 0 && axial > 0) return std::hypot(radial, axial);  // off the rim
-    return std::max(radial, axial);
-  }
-  const double r = q.norm();
-  const double n = q.cwiseQuotient(part.semi).norm();
-  return n > 0 ? r * (1.0 - 1.0 / n) : -part.semi.minCoeff();
-}
-
-}  // namespace
-
-double signedDistance(const TruncatedQuadric& part, const Vector3d& p) {
-  return localSignedDistance(part, part.frame.inverse() * p);
-}
-
 void applyModelPrior(const psfs::ProbabilityVolume& body, const BodyParts& parts,
                      const ModelPriorParams& params, psfs::ProbabilityVolume* out) {
   if (!out || out == &body) throw std::invalid_argument("applyModelPrior: out must be another volume");
   if (!std::isfinite(params.offset) || !std::isfinite(params.falloff) || !(params.falloff > 0))
     throw std::invalid_argument("applyModelPrior: offset must be finite and falloff > 0");
   const psfs::VoxelGrid& g = body.grid;
+  if (body.data.size() != g.numVoxels())
+    throw std::invalid_argument("applyModelPrior: the volume's data does not fill its grid");
   out->grid = g;
   out->data.assign(body.data.size(), 0);
-  // Beyond this distance even p = 254.5/255 maps below 0.5/255:
-  // logit(254.5/255) + logit(1 - 0.5/255) = 2 ln(509) units of log-odds.
-  const double reach = params.offset + 2.0 * std::log(509.0) * params.falloff;
-  // Nearest part's distance per voxel, part by part within its box grown by `reach` (a few
-  // thousand voxels each, where the whole grid holds ~200 000).
+  // Beyond this distance even byte 255 (p = 254.5/255) maps below 0.5/255:
+  // logit(254.5/255) + logit(1 - 0.5/255) = 2 ln(509) units of log-odds. Not below 0: the
+  // elliptic parts' ray distance can read deeper than the true one inside.
+  const double reach = std::max(0.0, params.offset + 2.0 * std::log(509.0) * params.falloff);
+  // Nearest part's distance per voxel, part by part within its box grown by `reach` (a trunk's
+  // box is ~13 000 voxels at 16 mm, a hand's ~2 000: far fewer than the grid's).
   std::vector<float> dist(body.data.size(), std::numeric_limits<float>::infinity());
   for (const TruncatedQuadric& part : parts) {
+    if (!part.bounds.min().allFinite() || !part.bounds.max().allFinite()) continue;
     const Eigen::Isometry3d to_local = part.frame.inverse();
     Eigen::Vector3i lo, hi;
     for (int a = 0; a < 3; ++a) {

@@ -1,5 +1,6 @@
 #include "body_tracking/truncated_quadric.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace body_tracking {
@@ -68,6 +69,24 @@ double TruncatedQuadric::volume() const {
 Vector3d TruncatedQuadric::centre() const {
   if (shape == Shape::CYLINDER) return frame * Vector3d(0, 0.5 * length, 0);
   return frame.translation();
+}
+
+double localSignedDistance(const TruncatedQuadric& part, const Vector3d& q) {
+  if (part.shape == TruncatedQuadric::Shape::CYLINDER) {
+    const double r = std::hypot(q.x(), q.z());
+    const double n = std::hypot(q.x() / part.semi.x(), q.z() / part.semi.z());  // 1 on the surface
+    const double radial = n > 0 ? r * (1.0 - 1.0 / n) : -std::min(part.semi.x(), part.semi.z());
+    const double axial = std::max(-q.y(), q.y() - part.length);  // > 0 beyond a cap
+    if (radial > 0 && axial > 0) return std::hypot(radial, axial);  // off the rim
+    return std::max(radial, axial);
+  }
+  const double r = q.norm();
+  const double n = q.cwiseQuotient(part.semi).norm();
+  return n > 0 ? r * (1.0 - 1.0 / n) : -part.semi.minCoeff();
+}
+
+double signedDistance(const TruncatedQuadric& part, const Vector3d& p) {
+  return localSignedDistance(part, part.frame.inverse() * p);
 }
 
 }  // namespace body_tracking

@@ -123,9 +123,15 @@ TEST(ModelPrior, SureEvidenceOutsideTheModelNeedsToBeSurerTheFartherOut) {
   for (const auto& [i, d] : probes) {
     const double l = std::log(254.0 / 1.0) - (d - prm.offset) / prm.falloff;
     EXPECT_NEAR(out.data[i], 255.0 / (1.0 + std::exp(-l)), 0.51) << d;
-    if (d < 0.020) EXPECT_GT(out.data[i], 127) << d;
-    if (d > 0.025) EXPECT_LE(out.data[i], 127) << d;
-    if (d > 0.06) EXPECT_EQ(out.data[i], 0) << d;  // beyond the reach of the byte
+    if (d < 0.020) {
+      EXPECT_GT(out.data[i], 127) << d;
+    }
+    if (d > 0.025) {
+      EXPECT_LE(out.data[i], 127) << d;
+    }
+    if (d > 0.06) {
+      EXPECT_EQ(out.data[i], 0) << d;  // beyond the reach of the byte
+    }
   }
 }
 
@@ -151,6 +157,8 @@ TEST(ModelPrior, NeverRaisesAProbabilityAndRejectsBadParameters) {
   EXPECT_THROW(applyModelPrior(v, parts, bad, &out), std::invalid_argument);
   EXPECT_THROW(applyModelPrior(v, parts, ModelPriorParams(), &v), std::invalid_argument);
   EXPECT_THROW(applyModelPrior(v, parts, ModelPriorParams(), nullptr), std::invalid_argument);
+  v.data.pop_back();  // a volume whose data does not fill its grid
+  EXPECT_THROW(applyModelPrior(v, parts, ModelPriorParams(), &out), std::invalid_argument);
 }
 
 }  // namespace

@@ -98,7 +98,7 @@ TEST(PapfPipeline, TracksTheSimulatedPersonAndPublishesItsOutputs) {
       [&](const tabletop_msgs::VoxelVolume::ConstPtr& v) {
         std::lock_guard<std::mutex> l(m);
         hulls[v->header.stamp] = v;
-        while (hulls.size() > 20) hulls.erase(hulls.begin());
+        while (hulls.size() > size_t(kFrames)) hulls.erase(hulls.begin());  // ~200 KB each
       };
   boost::function<void(const tabletop_msgs::VoxelVolume::ConstPtr&)> on_volume =
       [&](const tabletop_msgs::VoxelVolume::ConstPtr& v) {

@@ -9,9 +9,9 @@
 // cameras are sure of it (fingers, loose sleeves, hair, a shoulder the model sits off).
 //
 // Fusion in log-odds: logit p' = logit p - max(0, (d - offset) / falloff), d the voxel centre's
-// signed distance to the model (signedDistance, < 0 inside). The model only lowers
-// probabilities (a prior <= 0.5: it never adds volume the cameras did not see) and leaves
-// everything within `offset` of its surface as it was. With the defaults a voxel on the model's
+// signed distance to the model (signedDistance in truncated_quadric.h, < 0 inside). The model
+// only lowers probabilities (a prior <= 0.5: it never adds volume the cameras did not see) and
+// leaves voxels with d <= offset as they were. With the defaults a voxel on the model's
 // surface needs p >= 0.73 to stay at p' >= 0.5, 1 cm out p >= 0.95, 2 cm out p >= 0.993.
 // Measured on the scenario suite (docs/benchmarks.md, "body/volume: the tracked model as a
 // prior"), median / worst decile of the body IoU: random-1..24 0.571 / 0.315 -> 0.704 / 0.534
@@ -21,30 +21,16 @@
 // of the hull the model explains did not tell that from a 4-camera hull's far phantom).
 #pragma once
 
-#include <Eigen/Core>
-
 #include "body_tracking/body_parts.h"
+#include "body_tracking/model_prior_params.h"
 #include "psfs_reconstruction/probability_volume.h"
 
 namespace body_tracking {
 
-struct ModelPriorParams {
-  // m from the model's surface (negative: inside it) where the prior starts to fall. The model
-  // is fitted to the hull, which holds a voxel's worth of halo, so its parts run a little wide.
-  double offset = -0.005;
-  // m per unit of log-odds beyond the offset (> 0). The volume's surest voxel (p = 254.5/255,
-  // logit 6.2) is zeroed (below 0.5/255) 2 ln(509) = 12.5 falloffs beyond the offset.
-  double falloff = 0.005;
-};
-
-// Approximate signed distance (m) from p to the part's surface, negative inside: exact on
-// circular cylinders and spheres, along the ray from the axis or centre on elliptic ones; a
-// cylinder's end caps count by their planes.
-double signedDistance(const TruncatedQuadric& part, const Eigen::Vector3d& p);
-
 // `out` = `body` with the prior of the model `parts` (any grid; `out` takes body's). Voxels
 // beyond the reach of every part's box are set to 0 without a distance. Throws
-// std::invalid_argument for out == &body or null, a falloff <= 0 or a non-finite parameter.
+// std::invalid_argument for out == &body or null, a volume whose data does not fill its grid,
+// a falloff <= 0 or a non-finite parameter.
 void applyModelPrior(const psfs::ProbabilityVolume& body, const BodyParts& parts,
                      const ModelPriorParams& params, psfs::ProbabilityVolume* out);
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "body_tracking/body_profile.h"
-#include "body_tracking/model_prior.h"
+#include "body_tracking/model_prior_params.h"
 #include "body_tracking/papf_params.h"
 #include "tabletop_common/config_schema.h"
 

@@ -48,4 +48,12 @@ struct TruncatedQuadric {
   Eigen::Vector3d centre() const;
 };
 
+// Approximate signed distance (m) from p to the part's surface, negative inside: exact on
+// circular cylinders and spheres, along the ray from the axis or centre on elliptic ones (never
+// shorter than the true distance outside); a cylinder's end caps count by their planes.
+double signedDistance(const TruncatedQuadric& part, const Eigen::Vector3d& p);
+// The same for q in the part's local frame (part.frame.inverse() * p): loops over many points
+// transform once.
+double localSignedDistance(const TruncatedQuadric& part, const Eigen::Vector3d& q);
+
 }  // namespace body_tracking

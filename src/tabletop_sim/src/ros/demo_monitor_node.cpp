@@ -412,7 +412,6 @@ class DemoMonitor {
       s << buf;
     }
     for (int k = 0; k < kVolumeKinds; ++k) {
-      const char* kind = k == 0 ? "body" : k == 1 ? "skin" : "body/volume";
       const char* label = k == 0   ? "body volume IoU       "
                           : k == 1 ? "skin volume IoU       "
                                    : "body/volume IoU       ";  // the model prior's
@@ -424,7 +423,8 @@ class DemoMonitor {
                       k == 2 ? "; the body tracker's model as a prior on the body volume" : "");
         s << buf;
       } else if (volumes_received_[k] > 0) {
-        s << kind << " volumes          " << volumes_received_[k]
+        s << (k == 2 ? "body/volume volumes   " : k == 1 ? "skin volumes          " : "body volumes          ")
+          << volumes_received_[k]
           << (grid_mismatch_ ? " (not scored: grid differs from the oracle's)\n"
                              : " (not scored: no oracle volumes; simulated rig only)\n");
       }
