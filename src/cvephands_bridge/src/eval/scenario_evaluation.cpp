@@ -65,6 +65,11 @@ struct Overlap {
   size_t both = 0, reconstructed = 0, truth = 0;
   double precision() const { return reconstructed ? double(both) / reconstructed : kNaN; }
   double recall() const { return truth ? double(both) / truth : kNaN; }
+  // psfs::volumeIoU's value from the same counts (1 where both are empty).
+  double iou() const {
+    const size_t either = reconstructed + truth - both;
+    return either == 0 ? 1.0 : double(both) / double(either);
+  }
 };
 
 Overlap overlap(const psfs::ProbabilityVolume& v, uint8_t tb, const std::vector<uint8_t>& truth) {
@@ -317,23 +322,18 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
         const sim::Oracle oracle = rig.oracle(f);
         const psfs::VoxelGrid& grid = r.body.grid;
         oracle.sampleGrid(grid.origin, grid.voxel_size, grid.dims, &truth_body, &truth_skin);
-        psfs::ProbabilityVolume tv;  // the truth as a volume: psfs::volumeIoU scores it
-        tv.grid = grid;
         for (int k = 0; k < 2; ++k) {
           const psfs::ProbabilityVolume& rec = k == 0 ? r.body : r.skin;
-          tv.data = k == 0 ? truth_body : truth_skin;
-          const double iou = psfs::volumeIoU(rec, tb, tv, 0);
-          const Overlap ov = overlap(rec, tb, tv.data);
-          (k == 0 ? sf.body_iou : sf.skin_iou) = iou;
+          const Overlap ov = overlap(rec, tb, k == 0 ? truth_body : truth_skin);
+          (k == 0 ? sf.body_iou : sf.skin_iou) = ov.iou();
           (k == 0 ? sf.body_precision : sf.skin_precision) = ov.precision();
           (k == 0 ? sf.body_recall : sf.skin_recall) = ov.recall();
           (k == 0 ? sf.body_voxels : sf.skin_voxels) = ov.reconstructed;
         }
         res.body_iou.add(sf.body_iou);
         if (papf) {
-          tv.data = truth_body;
-          sf.body_volume_iou = psfs::volumeIoU(prior_volume, tb, tv, 0);
           const Overlap ov = overlap(prior_volume, tb, truth_body);
+          sf.body_volume_iou = ov.iou();
           sf.body_volume_precision = ov.precision();
           sf.body_volume_recall = ov.recall();
           res.body.volume_iou.add(sf.body_volume_iou);

@@ -412,19 +412,18 @@ class DemoMonitor {
       s << buf;
     }
     for (int k = 0; k < kVolumeKinds; ++k) {
-      const char* label = k == 0   ? "body volume IoU       "
-                          : k == 1 ? "skin volume IoU       "
-                                   : "body/volume IoU       ";  // the model prior's
+      static const char* const kNames[kVolumeKinds] = {"body volume", "skin volume", "body/volume"};
       if (iou_[k].count() > 0) {
         std::snprintf(buf, sizeof(buf),
-                      "%s mean %.3f, min %.3f over %llu frames (vs the oracle, p > %.2f)%s\n",
-                      label, iou_[k].mean(), iou_[k].min(),
+                      "%s IoU        mean %.3f, min %.3f over %llu frames (vs the oracle, p > %.2f)%s\n",
+                      kNames[k], iou_[k].mean(), iou_[k].min(),
                       static_cast<unsigned long long>(iou_[k].count()), threshold_byte_ / 255.0,
                       k == 2 ? "; the body tracker's model as a prior on the body volume" : "");
         s << buf;
       } else if (volumes_received_[k] > 0) {
-        s << (k == 2 ? "body/volume volumes   " : k == 1 ? "skin volumes          " : "body volumes          ")
-          << volumes_received_[k]
+        static const char* const kCounted[kVolumeKinds] = {"body volumes          ", "skin volumes          ",
+                                                           "body/volume volumes   "};
+        s << kCounted[k] << volumes_received_[k]
           << (grid_mismatch_ ? " (not scored: grid differs from the oracle's)\n"
                              : " (not scored: no oracle volumes; simulated rig only)\n");
       }
