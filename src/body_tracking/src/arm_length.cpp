@@ -53,9 +53,11 @@ std::vector<Voxel> armRegion(const VolumeObservation& obs, const BodyParts& trac
   const psfs::VoxelGrid& g = obs.grid();
   const std::vector<float>& body = obs.bodyLikelihood();
   std::vector<Voxel> out;
-  for (int z = 0; z < g.dims.z(); ++z)
-    for (int y = 0; y < g.dims.y(); ++y)
-      for (int x = 0; x < g.dims.x(); ++x) {
+  Eigen::Vector3i lo, hi;  // the voxels around the box, not the whole grid
+  if (!g.voxelRange(box.min(), box.max(), &lo, &hi)) return out;
+  for (int z = lo.z(); z <= hi.z(); ++z)
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int x = lo.x(); x <= hi.x(); ++x) {
         const Vector3d c = g.centre(x, y, z);
         if (!box.contains(c) || (c - hand).norm() < kHandClearance) continue;
         bool held = false;

@@ -26,13 +26,10 @@ void applyModelPrior(const psfs::ProbabilityVolume& body, const BodyParts& parts
   // box is ~13 000 voxels at 16 mm, a hand's ~2 000: far fewer than the grid's).
   std::vector<float> dist(body.data.size(), std::numeric_limits<float>::infinity());
   for (const TruncatedQuadric& part : parts) {
-    if (!part.bounds.min().allFinite() || !part.bounds.max().allFinite()) continue;
+    Eigen::Vector3i lo, hi;  // none for a part off the grid or with non-finite bounds
+    const Eigen::Vector3d grow = Eigen::Vector3d::Constant(reach);
+    if (!g.voxelRange(part.bounds.min() - grow, part.bounds.max() + grow, &lo, &hi)) continue;
     const Eigen::Isometry3d to_local = part.frame.inverse();
-    Eigen::Vector3i lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(0, int(std::floor((part.bounds.min()[a] - reach - g.origin[a]) / g.voxel_size)));
-      hi[a] = std::min(g.dims[a] - 1, int(std::floor((part.bounds.max()[a] + reach - g.origin[a]) / g.voxel_size)));
-    }
     for (int z = lo.z(); z <= hi.z(); ++z)
       for (int y = lo.y(); y <= hi.y(); ++y)
         for (int x = lo.x(); x <= hi.x(); ++x) {

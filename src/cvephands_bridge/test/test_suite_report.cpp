@@ -297,7 +297,9 @@ TEST(SuiteBody, BodyMeasuresAggregateMedianAndWorstDecileWithMissingAndNeverTrac
   for (const Bar& b : cvephands::regressionBars(true).bars)
     if (std::find(keys.begin(), keys.end(), b.key) != keys.end()) {
       ++floors;
-      if (b.key != "body_volume_iou") EXPECT_EQ(b.statistic, Statistic::kMedian) << b.key;
+      if (b.key != "body_volume_iou") {
+        EXPECT_EQ(b.statistic, Statistic::kMedian) << b.key;
+      }
     }
   EXPECT_EQ(floors, 5);
   for (const Bar& b : cvephands::regressionBars(false).bars)

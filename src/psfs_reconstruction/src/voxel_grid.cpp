@@ -23,6 +23,21 @@ bool VoxelGrid::voxelOf(const Eigen::Vector3d& p, Eigen::Vector3i* voxel) const 
   return true;
 }
 
+bool VoxelGrid::voxelRange(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
+                           Eigen::Vector3i* lo, Eigen::Vector3i* hi) const {
+  Eigen::Vector3i a, b;
+  for (int i = 0; i < 3; ++i) {
+    const double l = std::floor((min[i] - origin[i]) / voxel_size);
+    const double h = std::floor((max[i] - origin[i]) / voxel_size);
+    if (!(l <= h) || h < 0 || l >= dims[i]) return false;  // also NaN
+    a[i] = l < 0 ? 0 : static_cast<int>(l);
+    b[i] = h >= dims[i] ? dims[i] - 1 : static_cast<int>(h);
+  }
+  *lo = a;
+  *hi = b;
+  return true;
+}
+
 void VoxelGrid::validate() const {
   if (!origin.allFinite())
     throw std::invalid_argument("psfs::VoxelGrid: field 'origin' is not finite");

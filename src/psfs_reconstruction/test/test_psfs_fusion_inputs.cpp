@@ -35,6 +35,28 @@ TEST(VoxelGrid, ReferenceResolutionsAndIndexing) {
   ASSERT_TRUE(g16.voxelOf(g16.centre(i), &v));
   EXPECT_EQ(v, Eigen::Vector3i(5, 7, 11));
   EXPECT_FALSE(g16.voxelOf(Eigen::Vector3d(0.6, 0, 0.1), &v));
+  // voxelRange: the voxels a box meets, clipped; every voxel centre inside the box among them.
+  Eigen::Vector3i lo, hi;
+  const Eigen::Vector3d bmin(-0.123, 0.031, 0.2), bmax(0.077, 0.1, 0.35);
+  ASSERT_TRUE(g16.voxelRange(bmin, bmax, &lo, &hi));
+  for (size_t k = 0; k < g16.numVoxels(); ++k) {
+    const Eigen::Vector3d c = g16.centre(k);
+    const Eigen::Vector3i x = g16.coords(k);
+    const bool in_range = (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
+    if ((c.array() >= bmin.array()).all() && (c.array() <= bmax.array()).all()) {
+      EXPECT_TRUE(in_range) << k;
+    }
+    if (in_range) {  // ...and only voxels that meet the box: centres at most half a voxel out
+      EXPECT_TRUE(((c - bmin).array() >= -0.5 * g16.voxel_size - 1e-12).all() &&
+                  ((bmax - c).array() >= -0.5 * g16.voxel_size - 1e-12).all()) << k;
+    }
+  }
+  ASSERT_TRUE(g16.voxelRange(Eigen::Vector3d(-2, -2, -2), Eigen::Vector3d(2, 2, 2), &lo, &hi));  // clipped
+  EXPECT_EQ(lo, Eigen::Vector3i(0, 0, 0));
+  EXPECT_EQ(hi, Eigen::Vector3i(63, 63, 47));
+  EXPECT_FALSE(g16.voxelRange(Eigen::Vector3d(0.6, 0, 0), Eigen::Vector3d(0.7, 0.1, 0.1), &lo, &hi));  // off the grid
+  EXPECT_FALSE(g16.voxelRange(bmax, bmin, &lo, &hi));  // empty box
+  EXPECT_FALSE(g16.voxelRange(Eigen::Vector3d::Constant(NAN), bmax, &lo, &hi));
   const VoxelGrid hand = cubeGrid(Eigen::Vector3d(0.1, 0.2, 0.3), 0.3, 83);
   EXPECT_NEAR(hand.voxel_size, 0.3 / 83, 1e-15);
   EXPECT_TRUE(((hand.origin + hand.maxCorner()) / 2).isApprox(Eigen::Vector3d(0.1, 0.2, 0.3)));

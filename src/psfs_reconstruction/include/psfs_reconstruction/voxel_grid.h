@@ -38,6 +38,10 @@ struct VoxelGrid {
   Eigen::Vector3d maxCorner() const { return origin + voxel_size * dims.cast<double>(); }
   // Voxel containing a world point; false when the point lies outside the grid.
   bool voxelOf(const Eigen::Vector3d& p, Eigen::Vector3i* voxel) const;
+  // The voxels [lo, hi] (inclusive) that meet the world box [min, max], clipped to the grid:
+  // every voxel whose centre lies in the box is among them. False (lo, hi unset) when none is.
+  bool voxelRange(const Eigen::Vector3d& min, const Eigen::Vector3d& max, Eigen::Vector3i* lo,
+                  Eigen::Vector3i* hi) const;
 
   // Throws std::invalid_argument (message names the field) for non-finite values, a voxel size
   // <= 0 or a dimension < 1, and for grids above 2^31 voxels (indices are 32-bit in places).
