@@ -8,7 +8,40 @@
 
 namespace body_tracking {
 
+std::vector<TruncatedQuadric> priorSolids(const BodyProfile& profile, const BodyFrames& frames,
+                                          const ModelPriorParams& params) {
+  const BodyParts parts = buildParts(profile, frames);
+  std::vector<TruncatedQuadric> solids(parts.begin(), parts.end());
+  if (params.hand_reach > 0) {
+    for (Side s : {Side::LEFT, Side::RIGHT}) {
+      const int i = static_cast<int>(s);
+      const double half = profile.hand_half_length + 0.5 * params.hand_reach;
+      // Starts where the tracked hand starts (its wrist end) and ends hand_reach further.
+      solids[static_cast<int>(handPart(s))] = TruncatedQuadric::ellipsoid(
+          frames.forearm[i] * Eigen::Translation3d(0, profile.forearm + profile.wrist_to_hand +
+                                                          0.5 * params.hand_reach, 0),
+          Eigen::Vector3d(profile.hand_half_width, half, profile.hand_half_width));
+    }
+  }
+  if (params.neck_radius > 0) {
+    // The head frame's origin is the neck pivot, its z the head's axis; the cylinder's axis is
+    // its local y (a quarter turn about x puts it on z), from the shoulders' height (inside
+    // the chest) to the head's centre height (inside the head).
+    const double below = profile.neck_height - profile.shoulder_height;
+    const Eigen::Isometry3d start = frames.head * Eigen::Translation3d(0, 0, -below) *
+                                    Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX());
+    solids.push_back(TruncatedQuadric::cylinder(start, below + profile.head_centre_height,
+                                                params.neck_radius, params.neck_radius));
+  }
+  return solids;
+}
+
 void applyModelPrior(const psfs::ProbabilityVolume& body, const BodyParts& parts,
+                     const ModelPriorParams& params, psfs::ProbabilityVolume* out) {
+  applyModelPrior(body, std::vector<TruncatedQuadric>(parts.begin(), parts.end()), params, out);
+}
+
+void applyModelPrior(const psfs::ProbabilityVolume& body, const std::vector<TruncatedQuadric>& solids,
                      const ModelPriorParams& params, psfs::ProbabilityVolume* out) {
   if (!out || out == &body) throw std::invalid_argument("applyModelPrior: out must be another volume");
   if (!std::isfinite(params.offset) || !std::isfinite(params.falloff) || !(params.falloff > 0))
@@ -25,7 +58,7 @@ void applyModelPrior(const psfs::ProbabilityVolume& body, const BodyParts& parts
   // Nearest part's distance per voxel, part by part within its box grown by `reach` (a trunk's
   // box is ~13 000 voxels at 16 mm, a hand's ~2 000: far fewer than the grid's).
   std::vector<float> dist(body.data.size(), std::numeric_limits<float>::infinity());
-  for (const TruncatedQuadric& part : parts) {
+  for (const TruncatedQuadric& part : solids) {
     Eigen::Vector3i lo, hi;  // none for a part off the grid or with non-finite bounds
     const Eigen::Vector3d grow = Eigen::Vector3d::Constant(reach);
     if (!g.voxelRange(part.bounds.min() - grow, part.bounds.max() + grow, &lo, &hi)) continue;

@@ -58,6 +58,8 @@ void addPapfKeys(PapfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("publish_volume", &c->nodelet.publish_volume)
       .add("volume_prior/offset", &c->nodelet.volume_prior.offset)
       .add("volume_prior/falloff", &c->nodelet.volume_prior.falloff)
+      .add("volume_prior/neck_radius", &c->nodelet.volume_prior.neck_radius)
+      .add("volume_prior/hand_reach", &c->nodelet.volume_prior.hand_reach)
       .add("queue_size", &c->nodelet.queue_size);
 }
 
@@ -73,6 +75,10 @@ void finishPapfConfig(const std::string& where, PapfConfig* c) {
     throw std::runtime_error(where + "volume_prior/offset: must be in [-0.1, 0.1] m");
   if (!(c->nodelet.volume_prior.falloff > 0 && c->nodelet.volume_prior.falloff <= 0.1))
     throw std::runtime_error(where + "volume_prior/falloff: must be in (0, 0.1] m");
+  if (!(c->nodelet.volume_prior.neck_radius >= 0 && c->nodelet.volume_prior.neck_radius <= 0.15))
+    throw std::runtime_error(where + "volume_prior/neck_radius: must be in [0, 0.15] m");
+  if (!(c->nodelet.volume_prior.hand_reach >= 0 && c->nodelet.volume_prior.hand_reach <= 0.15))
+    throw std::runtime_error(where + "volume_prior/hand_reach: must be in [0, 0.15] m");
   if (!(c->nodelet.mask_margin_px >= 0 && c->nodelet.mask_margin_px <= 50))
     throw std::runtime_error(where + "mask_margin_px: must be in [0, 50]");
 }

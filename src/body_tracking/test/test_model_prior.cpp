@@ -52,7 +52,7 @@ TEST(ModelPrior, SignedDistanceToCylindersAndEllipsoids) {
 }
 
 // A person in the middle of the grid, arms forward over the desk.
-BodyParts person() {
+BodyFrames personFrames() {
   BodyState s{};
   s[dof::TORSO_Y] = -0.30;
   s[dof::SPINE_BEND] = 0.1;
@@ -60,9 +60,9 @@ BodyParts person() {
   s[armDof(Side::LEFT, 3)] = 0.35;
   s[armDof(Side::RIGHT, 0)] = -0.9;
   s[armDof(Side::RIGHT, 3)] = 1.2;
-  const BodyProfile p;
-  return buildParts(p, forwardKinematics(p, s));
+  return forwardKinematics(BodyProfile(), s);
 }
+BodyParts person() { return buildParts(BodyProfile(), personFrames()); }
 
 double distanceToModel(const BodyParts& parts, const Vector3d& p) {
   double d = INFINITY;
@@ -133,6 +133,72 @@ TEST(ModelPrior, SureEvidenceOutsideTheModelNeedsToBeSurerTheFartherOut) {
       EXPECT_EQ(out.data[i], 0) << d;  // beyond the reach of the byte
     }
   }
+}
+
+double distanceToSolids(const std::vector<TruncatedQuadric>& solids, const Vector3d& p) {
+  double d = INFINITY;
+  for (const TruncatedQuadric& q : solids) d = std::min(d, signedDistance(q, p));
+  return d;
+}
+
+TEST(ModelPrior, TheNeckAndTheFingerTipsTheModelLacksAreKept) {
+  const BodyProfile profile;
+  const BodyFrames f = personFrames();
+  const BodyParts parts = buildParts(profile, f);
+  ModelPriorParams none;
+  none.neck_radius = 0;
+  none.hand_reach = 0;
+  const std::vector<TruncatedQuadric> bare = priorSolids(profile, f, none);
+  ASSERT_EQ(bare.size(), parts.size());  // the tracked parts as they are
+  for (size_t k = 0; k < parts.size(); ++k) {
+    EXPECT_LT((bare[k].centre() - parts[k].centre()).norm(), 1e-12) << k;
+    EXPECT_LT((bare[k].semi - parts[k].semi).norm(), 1e-12) << k;
+  }
+  const ModelPriorParams prm;  // neck 5.5 cm, hands reaching 6 cm further
+  const std::vector<TruncatedQuadric> solids = priorSolids(profile, f, prm);
+  ASSERT_EQ(solids.size(), parts.size() + 1);
+  // 1.5 cm above the neck pivot lies between the chest's top (2.5 cm below the pivot) and the
+  // head's bottom (3 cm above): outside every part, 5.5 cm deep in the neck (on its axis, 6.5 cm
+  // above its bottom at the shoulders' height).
+  const Vector3d neck = f.head * Vector3d(0, 0, 0.015);
+  EXPECT_GT(distanceToModel(parts, neck), 0.0);
+  EXPECT_NEAR(distanceToSolids(solids, neck), -prm.neck_radius, 1e-9);
+  // Finger tips 15 cm past the wrist along the forearm: 3 cm beyond the tracked hand's end
+  // (wrist + 5 + 7 cm), 3 cm inside the reaching one (wrist + 18 cm).
+  for (int i = 0; i < 2; ++i) {
+    const Vector3d tip = f.forearm[i] * Vector3d(0, profile.forearm + 0.15, 0);
+    EXPECT_NEAR(distanceToModel(parts, tip), 0.03, 1e-9) << i;
+    EXPECT_NEAR(distanceToSolids(solids, tip), -0.03, 1e-9) << i;
+  }
+  // A volume that holds a neck of 4.5 cm radius and finger tips 1.2 cm thick out to 16.5 cm
+  // past the wrists, at p = 0.9: the model's parts alone cut them, the prior's solids keep
+  // every voxel of them.
+  psfs::ProbabilityVolume v = test::drawnVolume(parts);
+  std::fill(v.data.begin(), v.data.end(), 0);
+  const Eigen::Isometry3d to_head = f.head.inverse();
+  std::array<Eigen::Isometry3d, 2> to_forearm = {f.forearm[0].inverse(), f.forearm[1].inverse()};
+  std::vector<size_t> drawn;
+  for (size_t i = 0; i < v.data.size(); ++i) {
+    const Vector3d c = v.grid.centre(i);
+    const Vector3d h = to_head * c;
+    bool in = h.head<2>().norm() < 0.045 && h.z() > -0.04 && h.z() < 0.03;
+    for (int k = 0; k < 2; ++k) {
+      const Vector3d a = to_forearm[k] * c;
+      in |= Eigen::Vector2d(a.x(), a.z()).norm() < 0.012 && a.y() > profile.forearm + 0.12 &&
+            a.y() < profile.forearm + 0.165;
+    }
+    if (in && distanceToModel(parts, c) > 0.0) v.data[i] = 230, drawn.push_back(i);
+  }
+  ASSERT_GT(drawn.size(), 20u);
+  psfs::ProbabilityVolume cut, kept;
+  applyModelPrior(v, parts, prm, &cut);
+  applyModelPrior(v, solids, prm, &kept);
+  size_t cut_left = 0;
+  for (size_t i : drawn) {
+    cut_left += cut.data[i] > 127;
+    EXPECT_EQ(kept.data[i], 230) << "voxel " << i << ", " << distanceToSolids(solids, v.grid.centre(i)) << " m from the solids";
+  }
+  EXPECT_LT(cut_left, drawn.size() / 2);
 }
 
 TEST(ModelPrior, NeverRaisesAProbabilityAndRejectsBadParameters) {

@@ -338,7 +338,8 @@ class PapfNodelet : public nodelet::Nodelet {
     if (cfg_.nodelet.publish_volume && volume_pub_.getNumSubscribers() > 0) {
       const psfs::ProbabilityVolume* v = &body_;
       if (e.tracking) {
-        applyModelPrior(body_, parts, cfg_.nodelet.volume_prior, &prior_volume_);
+        applyModelPrior(body_, priorSolids(papf_->profile(), f, cfg_.nodelet.volume_prior),
+                        cfg_.nodelet.volume_prior, &prior_volume_);
         v = &prior_volume_;
       }
       auto msg = boost::make_shared<tabletop_msgs::VoxelVolume>();

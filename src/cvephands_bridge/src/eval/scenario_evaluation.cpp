@@ -300,8 +300,9 @@ ScenarioEvalResult evaluateScenario(const ScenarioEvalOptions& o) {
         body_was_tracking = e.tracking;
         if (g.person_present) {
           if (e.tracking)
-            body_tracking::applyModelPrior(r.body, body_tracking::buildParts(papf->profile(), e.frames),
-                                           volume_prior, &prior_volume);
+            body_tracking::applyModelPrior(
+                r.body, body_tracking::priorSolids(papf->profile(), e.frames, volume_prior),
+                volume_prior, &prior_volume);
           else
             prior_volume = r.body;
         }
