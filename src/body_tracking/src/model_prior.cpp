@@ -10,17 +10,20 @@ namespace body_tracking {
 
 std::vector<TruncatedQuadric> priorSolids(const BodyProfile& profile, const BodyFrames& frames,
                                           const ModelPriorParams& params) {
+  if (!(params.neck_radius >= 0 && params.neck_radius < 1) || !(params.hand_reach >= 0 && params.hand_reach < 1))
+    throw std::invalid_argument("priorSolids: neck_radius and hand_reach must be in [0, 1) m");
   const BodyParts parts = buildParts(profile, frames);
   std::vector<TruncatedQuadric> solids(parts.begin(), parts.end());
   if (params.hand_reach > 0) {
+    // Beside the tracked hand (not instead: a longer ellipsoid is narrower near the wrist), from
+    // its wrist end to hand_reach beyond its far end.
     for (Side s : {Side::LEFT, Side::RIGHT}) {
       const int i = static_cast<int>(s);
       const double half = profile.hand_half_length + 0.5 * params.hand_reach;
-      // Starts where the tracked hand starts (its wrist end) and ends hand_reach further.
-      solids[static_cast<int>(handPart(s))] = TruncatedQuadric::ellipsoid(
+      solids.push_back(TruncatedQuadric::ellipsoid(
           frames.forearm[i] * Eigen::Translation3d(0, profile.forearm + profile.wrist_to_hand +
                                                           0.5 * params.hand_reach, 0),
-          Eigen::Vector3d(profile.hand_half_width, half, profile.hand_half_width));
+          Eigen::Vector3d(profile.hand_half_width, half, profile.hand_half_width)));
     }
   }
   if (params.neck_radius > 0) {

@@ -4,6 +4,8 @@
 // workspace grid.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -151,12 +153,20 @@ TEST(ModelPrior, TheNeckAndTheFingerTipsTheModelLacksAreKept) {
   const std::vector<TruncatedQuadric> bare = priorSolids(profile, f, none);
   ASSERT_EQ(bare.size(), parts.size());  // the tracked parts as they are
   for (size_t k = 0; k < parts.size(); ++k) {
-    EXPECT_LT((bare[k].centre() - parts[k].centre()).norm(), 1e-12) << k;
+    EXPECT_TRUE(bare[k].frame.isApprox(parts[k].frame, 1e-12)) << k;
     EXPECT_LT((bare[k].semi - parts[k].semi).norm(), 1e-12) << k;
+    EXPECT_EQ(bare[k].length, parts[k].length) << k;
   }
   const ModelPriorParams prm;  // neck 5.5 cm, hands reaching 6 cm further
   const std::vector<TruncatedQuadric> solids = priorSolids(profile, f, prm);
-  ASSERT_EQ(solids.size(), parts.size() + 1);
+  ASSERT_EQ(solids.size(), parts.size() + 3);  // two reaching hands and a neck beside the parts
+  // The solids only add: no point is farther from them than from the parts.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (int n = 0; n < 3000; ++n) {
+    const Vector3d p = f.chest.translation() + Vector3d(u(rng), u(rng) + 0.2, u(rng));
+    EXPECT_LE(distanceToSolids(solids, p), distanceToModel(parts, p) + 1e-12) << p.transpose();
+  }
   // 1.5 cm above the neck pivot lies between the chest's top (2.5 cm below the pivot) and the
   // head's bottom (3 cm above): outside every part, 5.5 cm deep in the neck (on its axis, 6.5 cm
   // above its bottom at the shoulders' height).
@@ -178,18 +188,24 @@ TEST(ModelPrior, TheNeckAndTheFingerTipsTheModelLacksAreKept) {
   const Eigen::Isometry3d to_head = f.head.inverse();
   std::array<Eigen::Isometry3d, 2> to_forearm = {f.forearm[0].inverse(), f.forearm[1].inverse()};
   std::vector<size_t> drawn;
+  size_t finger_voxels = 0;
   for (size_t i = 0; i < v.data.size(); ++i) {
     const Vector3d c = v.grid.centre(i);
     const Vector3d h = to_head * c;
     bool in = h.head<2>().norm() < 0.045 && h.z() > -0.04 && h.z() < 0.03;
+    bool finger = false;
     for (int k = 0; k < 2; ++k) {
       const Vector3d a = to_forearm[k] * c;
-      in |= Eigen::Vector2d(a.x(), a.z()).norm() < 0.012 && a.y() > profile.forearm + 0.12 &&
-            a.y() < profile.forearm + 0.165;
+      finger |= Eigen::Vector2d(a.x(), a.z()).norm() < 0.012 && a.y() > profile.forearm + 0.12 &&
+                a.y() < profile.forearm + 0.165;
     }
-    if (in && distanceToModel(parts, c) > 0.0) v.data[i] = 230, drawn.push_back(i);
+    if ((in || finger) && distanceToModel(parts, c) > 0.0) {
+      v.data[i] = 230, drawn.push_back(i);
+      finger_voxels += finger;
+    }
   }
   ASSERT_GT(drawn.size(), 20u);
+  ASSERT_GE(finger_voxels, 4u) << "the finger tips fall between the voxel centres";
   psfs::ProbabilityVolume cut, kept;
   applyModelPrior(v, parts, prm, &cut);
   applyModelPrior(v, solids, prm, &kept);
@@ -199,6 +215,14 @@ TEST(ModelPrior, TheNeckAndTheFingerTipsTheModelLacksAreKept) {
     EXPECT_EQ(kept.data[i], 230) << "voxel " << i << ", " << distanceToSolids(solids, v.grid.centre(i)) << " m from the solids";
   }
   EXPECT_LT(cut_left, drawn.size() / 2);
+  ModelPriorParams bad;
+  bad.neck_radius = NAN;
+  EXPECT_THROW(priorSolids(profile, f, bad), std::invalid_argument);
+  bad.neck_radius = 0.05;
+  bad.hand_reach = -0.01;
+  EXPECT_THROW(priorSolids(profile, f, bad), std::invalid_argument);
+  bad.hand_reach = INFINITY;
+  EXPECT_THROW(priorSolids(profile, f, bad), std::invalid_argument);
 }
 
 TEST(ModelPrior, NeverRaisesAProbabilityAndRejectsBadParameters) {

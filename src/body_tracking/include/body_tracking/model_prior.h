@@ -34,9 +34,10 @@
 
 namespace body_tracking {
 
-// The solids the prior measures distances to: the model's parts (buildParts), the hands
-// reaching params.hand_reach further with a round cross-section, and a neck of
+// The solids the prior measures distances to: the model's parts (buildParts), beside each hand
+// one reaching params.hand_reach further with a round cross-section, and a neck of
 // params.neck_radius from the shoulders' height to the head's centre along the head's axis.
+// Throws std::invalid_argument for a neck_radius or hand_reach outside [0, 1) m (or NaN).
 std::vector<TruncatedQuadric> priorSolids(const BodyProfile& profile, const BodyFrames& frames,
                                           const ModelPriorParams& params);
 
