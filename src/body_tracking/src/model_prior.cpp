@@ -16,14 +16,13 @@ std::vector<TruncatedQuadric> priorSolids(const BodyProfile& profile, const Body
   std::vector<TruncatedQuadric> solids(parts.begin(), parts.end());
   if (params.hand_reach > 0) {
     // Beside the tracked hand (not instead: a longer ellipsoid is narrower near the wrist), from
-    // its wrist end to hand_reach beyond its far end.
+    // its wrist end to hand_reach beyond its far end, as wide across as it is along x.
     for (Side s : {Side::LEFT, Side::RIGHT}) {
-      const int i = static_cast<int>(s);
-      const double half = profile.hand_half_length + 0.5 * params.hand_reach;
+      const TruncatedQuadric& hand = parts[static_cast<int>(handPart(s))];
+      const double half = 0.5 * params.hand_reach;
       solids.push_back(TruncatedQuadric::ellipsoid(
-          frames.forearm[i] * Eigen::Translation3d(0, profile.forearm + profile.wrist_to_hand +
-                                                          0.5 * params.hand_reach, 0),
-          Eigen::Vector3d(profile.hand_half_width, half, profile.hand_half_width)));
+          hand.frame * Eigen::Translation3d(0, half, 0),
+          Eigen::Vector3d(hand.semi.x(), hand.semi.y() + half, hand.semi.x())));
     }
   }
   if (params.neck_radius > 0) {
