@@ -41,6 +41,10 @@ void MpfParams::validate() const {
   }
   nonNegative(frontal_plane_thickness, "frontal_plane_thickness");
   nonNegative(frontal_plane_gap, "frontal_plane_gap");
+  nonNegative(head_crown_thickness, "head_crown_thickness");
+  nonNegative(head_crown_gap, "head_crown_gap");
+  nonNegative(head_birth_depth, "head_birth_depth");
+  positive(head_birth_top_area, "head_birth_top_area");
   positive(likelihood_exponent, "likelihood_exponent");
   positive(reference_dt, "reference_dt");
   nonNegative(head_noise, "head_noise");

@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "hand_tracking/body_top.h"
 #include "hand_tracking/distal_centroid.h"
 #include "hand_tracking/resampling.h"
 
@@ -289,10 +290,15 @@ void MpfTracker::births() {
     // enough from every tracked target.
     int best = -1;
     double best_obs = -1.0;
+    // The head is the top of the seated body (body_top.h).
+    const double lowest = c.type == Target::kHead && params_.head_birth_depth > 0.0
+                              ? bodyTop(*body_, params_.head_birth_top_area) - params_.head_birth_depth
+                              : -std::numeric_limits<double>::infinity();
     for (int i = c.begin; i < c.begin + c.count; ++i) {
       const P& p = parts_[i];
       if (p.obs < init || p.obs <= best_obs) continue;
       const Eigen::Vector3d x = p.x.cast<double>();
+      if (x.z() < lowest) continue;  // false for NaN: no top, no limit
       bool far = true;
       for (const Component& o : comps_) {
         const double min_d = c.type == Target::kHand && o.type == Target::kHead

@@ -28,6 +28,10 @@ TEST(MpfConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.params.hand_particles, d.hand_particles);
   EXPECT_EQ(c.params.head_particles, d.head_particles);
   EXPECT_EQ(c.params.head_box, d.head_box);
+  EXPECT_EQ(c.params.head_crown_thickness, d.head_crown_thickness);
+  EXPECT_EQ(c.params.head_crown_gap, d.head_crown_gap);
+  EXPECT_EQ(c.params.head_birth_depth, d.head_birth_depth);
+  EXPECT_EQ(c.params.head_birth_top_area, d.head_birth_top_area);
   EXPECT_EQ(c.params.hand_box, d.hand_box);
   EXPECT_EQ(c.params.frontal_direction, d.frontal_direction);
   EXPECT_EQ(c.params.frontal_plane_thickness, d.frontal_plane_thickness);

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hand_tracking/body_top.h"
 #include "hand_tracking/box_observation.h"
 #include "hand_tracking/mpf_tracker.h"
 #include "hand_tracking/reclustering.h"
@@ -28,6 +29,7 @@ struct Scene {
   Vector3d hands[2] = {{-0.18, -0.22, 0.04}, {0.18, -0.22, 0.04}};
   bool hand_on[2] = {true, true};
   bool head_on = true;
+  bool skin_shirt = false;  // the torso skin-coloured too (a shirt in a skin tone)
 };
 
 void fillEllipsoid(psfs::ProbabilityVolume* v, const Vector3d& c, const Vector3d& semi,
@@ -58,6 +60,11 @@ void render(const Scene& s, uint64_t noise_seed, psfs::ProbabilityVolume* skin,
     fillEllipsoid(skin, s.head, {0.075, 0.095, 0.115}, 230);
     fillEllipsoid(body, s.head, {0.08, 0.10, 0.12}, 240);
     fillEllipsoid(body, s.head + Vector3d(0, 0.05, -0.45), {0.17, 0.12, 0.30}, 240);  // torso
+    if (s.skin_shirt) {  // and a neck (skin) that joins the chest to the head
+      fillEllipsoid(skin, s.head + Vector3d(0, 0.05, -0.45), {0.17, 0.12, 0.30}, 230);
+      for (psfs::ProbabilityVolume* v : {skin, body})
+        fillEllipsoid(v, s.head + Vector3d(0, 0.01, -0.15), {0.055, 0.055, 0.09}, 230);
+    }
   }
   for (int h = 0; h < 2; ++h) {
     if (!s.hand_on[h]) continue;
@@ -119,6 +126,15 @@ TEST(MpfTracker, RejectsBadParametersNamingTheField) {
   p = MpfParams();
   p.kmeans_max_iterations = 0;
   expectField(p, "kmeans_max_iterations");
+  p = MpfParams();
+  p.head_crown_gap = -0.01;
+  expectField(p, "head_crown_gap");
+  p = MpfParams();
+  p.head_birth_top_area = 0.0;
+  expectField(p, "head_birth_top_area");
+  p = MpfParams();
+  p.head_birth_depth = NAN;
+  expectField(p, "head_birth_depth");
   p = MpfParams();
   p.frontal_direction = -Vector3d::UnitX();  // any axis, either sign, is fine
   EXPECT_NO_THROW(MpfTracker(p, 1));
@@ -278,6 +294,86 @@ TEST(MpfTracker, NoHandIsBornOnTheHeadOrNeck) {
   ASSERT_TRUE(r.tracker.targets()[0].active);
   s.hand_on[0] = true;
   for (int i = 0; i < 20; ++i) EXPECT_EQ(activeHands(r.step(s)), 0) << "frame " << i;
+}
+
+TEST(MpfTracker, ASkinColouredShirtDoesNotTakeTheHead) {
+  // The torso is skin-coloured: it fills the head box better than the head does (the head's
+  // hair and halo are body, not skin). The head track starts near the top of the body and the
+  // crown slab keeps it there; without them (the thesis) it starts on the chest. (Hand tracks
+  // still start on such a chest: the figures print where they went.)
+  Scene s;
+  s.skin_shirt = true;
+  s.hands[0] = Vector3d(-0.30, -0.20, 0.30);  // raised beside the torso
+  s.hands[1] = Vector3d(0.30, -0.20, 0.30);
+  MpfParams thesis;
+  thesis.head_crown_thickness = 0.0;
+  thesis.head_birth_depth = 0.0;
+  for (const MpfParams& p : {thesis, MpfParams()}) {
+    SynthRun r(p);
+    for (int i = 0; i < 20; ++i) r.step(s);
+    const auto& t = r.tracker.targets();
+    const double err = (t[0].position - s.head).norm();
+    double hand_err[2] = {1.0, 1.0};
+    for (int h = 0; h < 2; ++h)
+      if (const Target* n = handNear(t, s.hands[h])) hand_err[h] = (n->position - s.hands[h]).norm();
+    const bool defaults = p.head_birth_depth > 0.0;
+    std::printf("[ figures  ] skin-coloured shirt, %s: head %s, %.0f mm from the truth; hands "
+                "%.0f / %.0f mm\n", defaults ? "defaults" : "thesis (no crown slab, no top)",
+                t[0].active ? "tracked" : "not tracked", 1e3 * err, 1e3 * hand_err[0],
+                1e3 * hand_err[1]);
+    if (!defaults) {
+      EXPECT_GT(err, 0.2);  // what the two rules are for: the head track on the chest
+      continue;
+    }
+    ASSERT_TRUE(t[0].active);
+    EXPECT_LT(err, 0.03);  // as on a shirt that is not skin (AcquiresHeadAndBothHands: 2 cm)
+  }
+}
+
+TEST(MpfTracker, CrownSlabTellsAHeadFromAChest) {
+  MpfParams p;
+  const BoxObservation obs(p);
+  Vector3d lo, hi;
+  obs.crownSlab({0.1, 0.2, 0.3}, &lo, &hi);
+  EXPECT_NEAR(lo.z(), 0.3 + 0.10 + p.head_crown_gap, 1e-12);  // the head box is 20 cm tall
+  EXPECT_NEAR(hi.z(), lo.z() + p.head_crown_thickness, 1e-12);
+  EXPECT_NEAR(lo.x(), 0.1 - 0.09, 1e-12);
+  EXPECT_NEAR(hi.y(), 0.2 + 0.09, 1e-12);
+  // A column of skin-coloured body (a chest with a head on it, 60 cm tall): a head box low in
+  // it has body over its crown slab, one at its top has not.
+  psfs::ProbabilityVolume skin, body;
+  skin.grid = body.grid = psfs::referenceGrid(psfs::Resolution::k16mm);
+  skin.data.assign(skin.grid.numVoxels(), 0);
+  body.data = skin.data;
+  fillEllipsoid(&skin, {0, 0, 0.30}, {0.15, 0.12, 0.30}, 255);
+  fillEllipsoid(&body, {0, 0, 0.30}, {0.15, 0.12, 0.30}, 255);
+  const IntegralVolume s(skin), b(body);
+  const double low = obs.head(s, b, {0, 0, 0.20});
+  const double top = obs.head(s, b, {0, 0, 0.48});
+  std::printf("[ figures  ] crown slab: head observation low in a skin column %.3f (skin alone "
+              "%.3f), at its top %.3f\n", low, s.boxMeanSmooth({-0.09, -0.09, 0.1}, {0.09, 0.09, 0.3}),
+              top);
+  EXPECT_LT(low, 0.05);
+  EXPECT_NEAR(top, s.boxMeanSmooth({-0.09, -0.09, 0.38}, {0.09, 0.09, 0.58}), 1e-12);
+}
+
+TEST(BodyTop, TheHighestLevelWithAHeadsWorthOfArea) {
+  psfs::ProbabilityVolume body;
+  body.grid = psfs::referenceGrid(psfs::Resolution::k16mm);
+  body.data.assign(body.grid.numVoxels(), 0);
+  EXPECT_TRUE(std::isnan(bodyTop(body, 0.004)));  // empty
+  fillEllipsoid(&body, {0, -0.3, 0.50}, {0.08, 0.10, 0.12}, 240);  // a head, top at 0.62 m
+  // A raised hand above it, 2 x 4 voxels in cross-section (under 0.004 m^2 = 16 voxels).
+  fillEllipsoid(&body, {0.05, -0.3, 0.70}, {0.016, 0.032, 0.04}, 240);
+  const double top = bodyTop(body, 0.004);
+  const double s = body.grid.voxel_size;
+  // The head's highest level with 16 voxels lies a little under its top: within 3 voxels.
+  EXPECT_LE(top, 0.62 + 1e-9);
+  EXPECT_GT(top, 0.62 - 3 * s);
+  // Any voxel counts with a tiny area: the hand's top (0.74 m) to a voxel.
+  EXPECT_NEAR(bodyTop(body, 1e-6), 0.74, s);
+  // Below the threshold, nothing counts.
+  EXPECT_TRUE(std::isnan(bodyTop(body, 1e-6, 0.95)));
 }
 
 TEST(MpfTracker, NothingIsBornInAnEmptyWorkspace) {

@@ -21,6 +21,19 @@ struct MpfParams {
   // together, fill well under half of it (the volume-size cue that tells heads from hands);
   // a smaller one (12 cm) settles on the neck and chin, which are skin too.
   Eigen::Vector3d head_box{0.18, 0.18, 0.20};
+  // The head is the top of the body: its observation is multiplied by the mean non-occupancy
+  // (1 - P(F), body volume) of a horizontal slab over the head box's cross-section,
+  // head_crown_thickness thick, head_crown_gap above the box's top. Not in the thesis: its
+  // users wore clothes that are not skin-coloured. A shirt in a skin tone (brown, beige,
+  // orange) makes the chest the largest skin blob, and the head track ends there with the
+  // face taken for a hand (4 of 48 generated scenarios, random-27, 28, 34, 39). Over
+  // the chest, the neck and head fill the slab; over a head nothing does. The gap keeps the
+  // slab clear of the real head's crown: the head particles settle on the face and neck (the
+  // skin), 5 cm and more below the head's centre, and the crown with hair and the hull's halo
+  // reaches 14-18 cm above the centre, i.e. up to 13 cm over the box's top (a 10 cm gap lost
+  // the head in one of 48 generated scenarios). 0 thickness = off.
+  double head_crown_thickness = 0.032;  // m, two voxels of the 64x64x48 tracking volume
+  double head_crown_gap = 0.13;         // m between the head box's top and the slab
   // Hand: mean skin probability in a palm-sized box (m) times the mean non-occupancy (1 - P(F)
   // from the body volume) of the box's frontal plane: a slab of frontal_plane_thickness just
   // outside the box face that points along frontal_direction, over the box's cross-section.
@@ -64,6 +77,15 @@ struct MpfParams {
   // resting on the desk ~0.35, a raised hand 0.35-0.45, the head ~0.55-0.65, the face seen
   // through a palm box ~0.5 (the head distance keeps hands off it).
   double head_init_weight = 0.45;  // observation (0..1)
+  // The head track starts only within head_birth_depth (m) below the top of the body (the
+  // highest level of the body volume with head_birth_top_area (m^2) occupied, body_top.h),
+  // not on a skin-coloured chest whose head box outscores the head's (hair is not skin). The
+  // face, where head particles settle, lies up to ~20 cm below the top of a head with hair
+  // and the hull's halo, the chest 35 cm and more. Area: 16 voxels at 16 mm, a head's crown
+  // 2 cm below its top; a raised hand's cross-section is a third of it. The crown slab above
+  // keeps a track that started on the head from sliding onto such a chest. 0 depth = off.
+  double head_birth_depth = 0.30;
+  double head_birth_top_area = 0.004;
   double hand_init_weight = 0.25;
   double birth_min_distance = 0.15;  // m
   double birth_spread = 0.02;        // m, std of the new component's particles around the find
