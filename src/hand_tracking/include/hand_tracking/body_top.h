@@ -11,7 +11,8 @@
 namespace hand_tracking {
 
 // z (m, world) of the upper face of the highest level of `body` with at least `min_area` (m^2)
-// of voxels above `threshold` (probability); NaN when no level has.
+// of voxels above `threshold` (probability); NaN when no level has, or when the volume is
+// malformed (data size not the grid's, voxel size <= 0).
 double bodyTop(const psfs::ProbabilityVolume& body, double min_area, double threshold = 0.5);
 
 }  // namespace hand_tracking

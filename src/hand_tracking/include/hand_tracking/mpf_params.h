@@ -81,8 +81,8 @@ struct MpfParams {
   // highest level of the body volume with head_birth_top_area (m^2) occupied, body_top.h),
   // not on a skin-coloured chest whose head box outscores the head's (hair is not skin). The
   // face, where head particles settle, lies up to ~20 cm below the top of a head with hair
-  // and the hull's halo, the chest 35 cm and more. Area: 16 voxels at 16 mm, a head's crown
-  // 2 cm below its top; a raised hand's cross-section is a third of it. The crown slab above
+  // and the hull's halo, the chest 35 cm and more. Area: 17 voxels of 15.6 mm, a head's crown
+  // 2 cm below its top; a raised hand's cross-section is about half of it. The crown slab above
   // keeps a track that started on the head from sliding onto such a chest. 0 depth = off.
   double head_birth_depth = 0.30;
   double head_birth_top_area = 0.004;
