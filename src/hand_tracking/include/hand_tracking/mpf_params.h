@@ -31,7 +31,10 @@ struct MpfParams {
   // slab clear of the real head's crown: the head particles settle on the face and neck (the
   // skin), 5 cm and more below the head's centre, and the crown with hair and the hull's halo
   // reaches 14-18 cm above the centre, i.e. up to 13 cm over the box's top (a 10 cm gap lost
-  // the head in one of 48 generated scenarios). 0 thickness = off.
+  // the head in one of 48 generated scenarios). Where cameras look down steeply the halo
+  // reaches further: 13 cm still loses random-10's head over its whole script, 20 cm keeps it
+  // but lets a short-necked all-skin chest keep the head track (docs/benchmarks.md, "MPF: the
+  // head as the top of the body"). 0 thickness = off.
   double head_crown_thickness = 0.032;  // m, two voxels of the 64x64x48 tracking volume
   double head_crown_gap = 0.13;         // m between the head box's top and the slab
   // Hand: mean skin probability in a palm-sized box (m) times the mean non-occupancy (1 - P(F)
