@@ -1,10 +1,12 @@
 // The MPF's logic on synthetic volumes (fast, exact ground truth): skin and body volumes drawn
 // as solid ellipsoids on the 64x64x48 reference grid over a noisy floor, a head, two hands and
 // forearms. Checks birth, tracking, loss and re-acquisition with identity, merge and split with
-// identity, the head exclusion, the input checks, determinism, and the building blocks
-// (resampling, typed k-means, the frontal plane).
+// identity, the head exclusion, the head on a skin-coloured trunk (crown slab, birth near the
+// body's top), the input checks, determinism, and the building blocks (resampling, typed
+// k-means, the frontal plane, the crown slab, the body's top).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -46,6 +48,22 @@ void fillEllipsoid(psfs::ProbabilityVolume* v, const Vector3d& c, const Vector3d
       }
 }
 
+void fillCapsule(psfs::ProbabilityVolume* v, const Vector3d& a, const Vector3d& b, double r,
+                 uint8_t value) {
+  const psfs::VoxelGrid& g = v->grid;
+  const Vector3d ab = b - a;
+  for (int z = 0; z < g.dims.z(); ++z)
+    for (int y = 0; y < g.dims.y(); ++y)
+      for (int x = 0; x < g.dims.x(); ++x) {
+        const Vector3d p = g.centre(x, y, z);
+        const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+        if ((p - (a + t * ab)).norm() <= r) {
+          uint8_t& c = v->data[g.index(x, y, z)];
+          c = std::max(c, value);
+        }
+      }
+}
+
 // Skin and body volumes on the reference grid, both holding the same solid ellipsoid.
 void solidSkin(const Vector3d& c, const Vector3d& semi, psfs::ProbabilityVolume* skin,
                psfs::ProbabilityVolume* body) {
@@ -70,10 +88,18 @@ void render(const Scene& s, uint64_t noise_seed, psfs::ProbabilityVolume* skin,
     fillEllipsoid(skin, s.head, {0.075, 0.095, 0.115}, 230);
     fillEllipsoid(body, s.head, {0.08, 0.10, 0.12}, 240);
     fillEllipsoid(body, s.head + Vector3d(0, 0.05, -0.45), {0.17, 0.12, 0.30}, 240);  // torso
-    if (s.skin_shirt) {  // and a neck (skin) that joins the chest to the head
-      fillEllipsoid(skin, s.head + Vector3d(0, 0.05, -0.45), {0.17, 0.12, 0.30}, 230);
-      for (psfs::ProbabilityVolume* v : {skin, body})
-        fillEllipsoid(v, s.head + Vector3d(0, 0.01, -0.15), {0.055, 0.055, 0.09}, 230);
+    if (s.skin_shirt) {
+      // The simulator's trunk, neck and hair (tabletop_sim body_model.cpp, medium adult), all
+      // skin but the hair: where the slab over a chest box lands depends on the neck's length.
+      const Vector3d spine = s.head - Vector3d(0, 0.025, 0.49);  // head centre 0.49 m above it
+      for (psfs::ProbabilityVolume* v : {skin, body}) {
+        fillEllipsoid(v, spine + Vector3d(0, 0, 0.15), {0.165, 0.105, 0.17}, 230);  // chest
+        fillCapsule(v, spine + Vector3d(-0.15, 0, 0.27), spine + Vector3d(0.15, 0, 0.27), 0.055,
+                    230);                                                           // shoulders
+        fillCapsule(v, spine + Vector3d(0, 0, 0.27), spine + Vector3d(0, 0.005, 0.41), 0.05,
+                    230);                                                           // neck
+      }
+      fillEllipsoid(body, s.head + Vector3d(0, -0.025, 0.03), {0.082, 0.092, 0.11}, 240);  // hair
     }
   }
   for (int h = 0; h < 2; ++h) {
@@ -307,10 +333,10 @@ TEST(MpfTracker, NoHandIsBornOnTheHeadOrNeck) {
 }
 
 TEST(MpfTracker, ASkinColouredShirtDoesNotTakeTheHead) {
-  // The torso is skin-coloured: it fills the head box better than the head does (the head's
-  // hair and halo are body, not skin). The head track starts near the top of the body and the
-  // crown slab keeps it there; without them (the thesis) it starts on the chest. (Hand tracks
-  // still start on such a chest: the figures print where they went.)
+  // The trunk is skin-coloured: it fills the head box better than the head does (the head's
+  // hair and halo are body, not skin). Without the crown slab and the birth rule (the thesis)
+  // the head track ends on the chest; with them it stays on the head. (Hand tracks still
+  // start on such a chest: the figures print where they went.)
   Scene s;
   s.skin_shirt = true;
   s.hands[0] = Vector3d(-0.30, -0.20, 0.30);  // raised beside the torso
@@ -318,7 +344,7 @@ TEST(MpfTracker, ASkinColouredShirtDoesNotTakeTheHead) {
   MpfParams thesis;
   thesis.head_crown_thickness = 0.0;
   thesis.head_birth_depth = 0.0;
-  MpfParams slab_only;  // the slab alone does not stop a track that starts on the chest
+  MpfParams slab_only;  // figures only: whether the slab alone suffices depends on the neck
   slab_only.head_birth_depth = 0.0;
   for (const MpfParams& p : {thesis, slab_only, MpfParams()}) {
     SynthRun r(p);
@@ -329,20 +355,45 @@ TEST(MpfTracker, ASkinColouredShirtDoesNotTakeTheHead) {
     for (int h = 0; h < 2; ++h)
       if (const Target* n = handNear(t, s.hands[h])) hand_err[h] = (n->position - s.hands[h]).norm();
     const bool defaults = p.head_birth_depth > 0.0;
+    const bool slab = p.head_crown_thickness > 0.0;
     std::printf("[ figures  ] skin-coloured shirt, %s: head %s, %.0f mm from the truth; hands "
                 "%.0f / %.0f mm\n",
-                defaults ? "defaults" : p.head_crown_thickness > 0.0 ? "crown slab only"
-                                                                      : "thesis (no slab, no top)",
+                defaults ? "defaults" : slab ? "crown slab only" : "thesis (no slab, no top)",
                 t[0].active ? "tracked" : "not tracked", 1e3 * err, 1e3 * hand_err[0],
                 1e3 * hand_err[1]);
     ASSERT_TRUE(t[0].active);
-    if (!defaults) {
-      EXPECT_GT(err, 0.2);  // what the birth rule is for: the head track on the chest
-      continue;
-    }
+    if (!defaults && !slab) EXPECT_GT(err, 0.2);  // the chest: 30 cm and more below the head
     // As on a shirt that is not skin (AcquiresHeadAndBothHands: 13 mm, the head model's fit
     // within a voxel of 15.6 mm): two voxels.
-    EXPECT_LT(err, 0.03);
+    if (defaults) EXPECT_LT(err, 0.03);
+  }
+}
+
+TEST(MpfTracker, TheHeadTrackStartsNearTheTopOfTheBody) {
+  // The birth rule alone (no crown slab): on a skin-coloured trunk the head track starts
+  // within head_birth_depth of the body's top, on the head; without the rule, on the chest.
+  Scene s;
+  s.skin_shirt = true;
+  s.hand_on[0] = s.hand_on[1] = false;
+  for (const double depth : {0.0, MpfParams().head_birth_depth}) {
+    MpfParams p;
+    p.head_crown_thickness = 0.0;
+    p.head_birth_depth = depth;
+    SynthRun r(p);
+    int frame = 0;
+    while (frame < 10 && !r.step(s)[0].active) ++frame;
+    const Target& head = r.tracker.targets()[0];
+    ASSERT_TRUE(head.active) << "depth " << depth;
+    const double err = (head.position - s.head).norm();
+    std::printf("[ figures  ] head birth %s: frame %d, %.0f mm from the truth (z %.3f m)\n",
+                depth > 0.0 ? "near the body's top" : "anywhere (thesis)", frame, 1e3 * err,
+                head.position.z());
+    if (depth > 0.0) {
+      EXPECT_GE(head.position.z(), bodyTop(r.body, p.head_birth_top_area) - depth);
+      EXPECT_LT(err, 0.03);  // on the head, as in ASkinColouredShirtDoesNotTakeTheHead
+    } else {
+      EXPECT_GT(err, 0.2);  // on the chest
+    }
   }
 }
 
@@ -356,21 +407,23 @@ TEST(MpfTracker, CrownSlabTellsAHeadFromAChest) {
   EXPECT_NEAR(lo.x(), 0.1 - 0.09, 1e-12);
   EXPECT_NEAR(hi.y(), 0.2 + 0.09, 1e-12);
   // A column of skin-coloured body (a chest with a head on it, 60 cm tall): a head box low in
-  // it has body over its crown slab, one at its top has not.
+  // it has body over its crown slab (0.42 m up, inside the column), one at its top has not
+  // (its slab lies above the workspace, as a real head's on the rig).
   psfs::ProbabilityVolume skin, body;
   solidSkin({0, 0, 0.30}, {0.15, 0.12, 0.30}, &skin, &body);
   const IntegralVolume s(skin), b(body);
-  const double low = obs.head(s, b, {0, 0, 0.20});
+  const double low_z = 0.42 - 0.10 - p.head_crown_gap;
+  const double low = obs.head(s, b, {0, 0, low_z});
   const double top = obs.head(s, b, {0, 0, 0.48});
   std::printf("[ figures  ] crown slab: head observation low in a skin column %.3f (skin alone "
-              "%.3f), at its top %.3f\n", low, s.boxMeanSmooth({-0.09, -0.09, 0.1}, {0.09, 0.09, 0.3}),
-              top);
+              "%.3f), at its top %.3f\n", low,
+              s.boxMeanSmooth({-0.09, -0.09, low_z - 0.1}, {0.09, 0.09, low_z + 0.1}), top);
   EXPECT_LT(low, 0.05);
   EXPECT_NEAR(top, s.boxMeanSmooth({-0.09, -0.09, 0.38}, {0.09, 0.09, 0.58}), 1e-12);
   // A head low enough for the slab to lie inside the grid: its skin ellipsoid (the simulator's
   // 0.075 x 0.095 x 0.115 m) centred at 0.40 m under hair and a halo reaching 0.18 m above the
   // centre (body only). Head particles settle on the face, 5 cm below the centre: the slab
-  // starts 0.35 + 0.10 + 0.13 = 0.58 m up, clear of the 0.58 m crown, so the observation is the
+  // starts 0.35 + 0.10 + 0.20 = 0.65 m up, clear of the 0.58 m crown, so the observation is the
   // skin mean alone.
   psfs::ProbabilityVolume hs, hb;
   solidSkin({0, 0, 0.40}, {0.075, 0.095, 0.115}, &hs, &hb);
