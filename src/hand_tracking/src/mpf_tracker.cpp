@@ -313,8 +313,9 @@ void MpfTracker::births() {
     if (best < 0) continue;
     const Eigen::Vector3d at = parts_[best].x.cast<double>();
     // Volume-size check (thesis 5.1): while no head is tracked, a hand is not born on a blob
-    // that passes as a head (the face fills a palm box as well as a hand does). With the crown
-    // slab a skin-coloured chest no longer passes as a head here either: it is not one.
+    // that passes as a head (the face fills a palm box as well as a hand does). The crown slab
+    // lowers a skin-coloured chest's head observation (its slab holds the neck and head), so
+    // such a chest blocks hand births here less often; the birth-depth limit is not applied.
     if (c.type == Target::kHand && !comps_[kHeadSlot].active &&
         observation_.head(skin_iv_, body_iv_, at) >= params_.head_init_weight)
       continue;

@@ -32,8 +32,8 @@ struct MpfParams {
   // skin), 5 cm and more below the head's centre, and the crown with hair and the hull's halo
   // reaches 14-18 cm above the centre, i.e. up to 13 cm over the box's top (a 10 cm gap lost
   // the head in one of 48 generated scenarios). A wider gap lets the head track sink onto the
-  // neck of a skin-coloured shirt: 20 cm on whole scripts, random-34's head 12.8 -> 21.3 mm
-  // (docs/benchmarks.md, "MPF: the head as the top of the body"). 0 thickness = off.
+  // neck of a skin-coloured shirt (0.20 m, whole scripts: random-34's head 12.8 -> 21.3 mm;
+  // docs/benchmarks.md, "MPF: the head's birth threshold"). 0 thickness = off.
   double head_crown_thickness = 0.032;  // m, two voxels of the 64x64x48 tracking volume
   double head_crown_gap = 0.13;         // m between the head box's top and the slab
   // Hand: mean skin probability in a palm-sized box (m) times the mean non-occupancy (1 - P(F)
@@ -75,14 +75,15 @@ struct MpfParams {
   // voxels of the skin volume above search_skin_threshold, a proposal that only decides where
   // to look); the best one activates the component if its observation reaches the
   // initialisation weight and it lies at least birth_min_distance from every tracked target.
-  // Observations of the simulated rig's volumes: an empty workspace ~0.04 everywhere, a hand
-  // resting on the desk ~0.35, a raised hand 0.35-0.45, the face seen through a palm box ~0.5
-  // (the head distance keeps hands off it). The head: ~0.55-0.65 on the default scenario, but
-  // 0.3-0.45 where hair, dark skin or a coloured light leave less of the head box skin: at
-  // 0.45 the head of random-10 (orange light) was never found over its whole script and a
-  // hand track took its face, and four of random-25..48 never had a head. The birth rule
-  // below (the head starts near the top of the body) keeps the lower threshold off chests
-  // and hands; the volume-size check (no hand birth where a head would be) uses it too.
+  // Observations of the simulated rig's volumes (hands: palm box; head: head box): an empty
+  // workspace ~0.04 everywhere, a hand resting on the desk ~0.35, a raised hand 0.35-0.45, the
+  // face seen through a palm box ~0.5 (the head distance keeps hands off it). The head is
+  // ~0.55-0.65 on the default scenario but 0.3-0.45 where hair, dark skin or a coloured light
+  // leave less of the head box skin: at 0.45 the head of random-10 (orange light) was never
+  // found over its whole script and a hand track took its face, and four of random-25..48
+  // never had a head. The birth rule below (the head starts near the top of the body) keeps
+  // the lower threshold off chests and arms; the volume-size check (no hand birth where a
+  // head would be) uses it too.
   double head_init_weight = 0.35;  // observation (0..1)
   // The head track starts only within head_birth_depth (m) below the top of the body (the
   // highest level of the body volume with head_birth_top_area (m^2) occupied, body_top.h),
