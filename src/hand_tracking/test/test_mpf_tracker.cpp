@@ -1,9 +1,9 @@
 // The MPF's logic on synthetic volumes (fast, exact ground truth): skin and body volumes drawn
-// as solid ellipsoids and capsules on the 64x64x48 reference grid over a noisy floor, a head, two hands and
-// forearms. Checks birth, tracking, loss and re-acquisition with identity, merge and split with
-// identity, the head exclusion, the head on a skin-coloured trunk (crown slab, birth near the
-// body's top), the input checks, determinism, and the building blocks (resampling, typed
-// k-means, the frontal plane, the crown slab, the body's top).
+// as solid ellipsoids and capsules on the 64x64x48 reference grid over a noisy floor, a head,
+// two hands and forearms. Checks birth, tracking, loss and re-acquisition with identity, merge
+// and split with identity, the head exclusion, the head on a skin-coloured trunk (crown slab,
+// birth near the body's top), the input checks, determinism, and the building blocks
+// (resampling, typed k-means, the frontal plane, the crown slab, the body's top).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -359,7 +359,8 @@ TEST(MpfTracker, ASkinColouredShirtDoesNotTakeTheHead) {
     const double err = (t[0].position - s.head).norm();
     double hand_err[2] = {1.0, 1.0};
     for (int h = 0; h < 2; ++h)
-      if (const Target* n = handNear(t, s.hands[h])) hand_err[h] = (n->position - s.hands[h]).norm();
+      if (const Target* n = handNear(t, s.hands[h]))
+        hand_err[h] = (n->position - s.hands[h]).norm();
     const bool defaults = p.head_birth_depth > 0.0;
     const bool slab = p.head_crown_thickness > 0.0;
     std::printf("[ figures  ] skin-coloured shirt, %s: head %s, %.0f mm from the truth; hands "
@@ -392,7 +393,8 @@ TEST(MpfTracker, AHeadWithLittleSkinIsFound) {
   const IntegralVolume siv(skin), biv(body);
   const MpfParams defaults;
   const double obs = BoxObservation(defaults).head(siv, biv, s.head);
-  std::printf("[ figures  ] a head with little skin: head observation %.3f at the true head\n", obs);
+  std::printf("[ figures  ] a head with little skin: head observation %.3f at the true head\n",
+              obs);
   ASSERT_GT(obs, defaults.head_init_weight);
   ASSERT_LT(obs, kEarlierHeadInitWeight);  // as random-10's
   MpfParams strict;  // the threshold before 2026-12-06
