@@ -18,6 +18,7 @@
 #include "hand_tracking/mpf_tracker.h"
 #include "hand_tracking/reclustering.h"
 #include "hand_tracking/resampling.h"
+#include "tabletop_sim/primitives.h"
 
 namespace hand_tracking {
 namespace {
@@ -36,35 +37,31 @@ struct Scene {
   double head_skin_scale = 1.0;  // < 1: less of the head is skin (hair, dark skin, coloured light)
 };
 
-void fillEllipsoid(psfs::ProbabilityVolume* v, const Vector3d& c, const Vector3d& semi,
-                   uint8_t value) {
+// Raises every voxel whose centre is inside to at least `value`.
+template <class Inside>
+void fillWhere(psfs::ProbabilityVolume* v, const Inside& inside, uint8_t value) {
   const psfs::VoxelGrid& g = v->grid;
   for (int z = 0; z < g.dims.z(); ++z)
     for (int y = 0; y < g.dims.y(); ++y)
-      for (int x = 0; x < g.dims.x(); ++x) {
-        const Vector3d d = (g.centre(x, y, z) - c).cwiseQuotient(semi);
-        if (d.squaredNorm() <= 1.0) {
+      for (int x = 0; x < g.dims.x(); ++x)
+        if (inside(g.centre(x, y, z))) {
           uint8_t& b = v->data[g.index(x, y, z)];
           b = std::max(b, value);
         }
-      }
 }
 
+void fillEllipsoid(psfs::ProbabilityVolume* v, const Vector3d& c, const Vector3d& semi,
+                   uint8_t value) {
+  fillWhere(v, [&](const Vector3d& p) { return (p - c).cwiseQuotient(semi).squaredNorm() <= 1.0; },
+            value);
+}
+
+// The simulator's capsule (its inside test, as the renderer and the oracle use it).
 void fillCapsule(psfs::ProbabilityVolume* v, const Vector3d& a, const Vector3d& b, double r,
                  uint8_t value) {
-  const psfs::VoxelGrid& g = v->grid;
-  const Vector3d ab = b - a;
-  if (ab.squaredNorm() == 0.0) return fillEllipsoid(v, a, Vector3d::Constant(r), value);
-  for (int z = 0; z < g.dims.z(); ++z)
-    for (int y = 0; y < g.dims.y(); ++y)
-      for (int x = 0; x < g.dims.x(); ++x) {
-        const Vector3d p = g.centre(x, y, z);
-        const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-        if ((p - (a + t * ab)).norm() <= r) {
-          uint8_t& c = v->data[g.index(x, y, z)];
-          c = std::max(c, value);
-        }
-      }
+  const tabletop_sim::Primitive cap = tabletop_sim::Primitive::capsule(
+      a, b, r, tabletop_sim::Material::SKIN, tabletop_sim::BodyPart::TORSO);
+  fillWhere(v, [&](const Vector3d& p) { return cap.contains(p); }, value);
 }
 
 // Skin and body volumes on the reference grid, both holding the same solid ellipsoid.
