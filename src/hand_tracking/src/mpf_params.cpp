@@ -62,6 +62,7 @@ void MpfParams::validate() const {
     fail("hand_track_weight", "must not exceed hand_init_weight (hysteresis)");
   nonNegative(birth_min_distance, "birth_min_distance");
   nonNegative(birth_spread, "birth_spread");
+  unit(birth_limb_fraction, "birth_limb_fraction");
   unit(search_skin_threshold, "search_skin_threshold");
   unit(search_skin_fraction, "search_skin_fraction");
   if (kmeans_max_iterations < 1) fail("kmeans_max_iterations", "must be >= 1");

@@ -64,14 +64,15 @@ bool MpfTracker::handPlaceOk(const Reclustering& r, const Eigen::Vector3d& x,
 }
 
 // The strongest particle of a component at min_obs or above (and, for a hand, at a place
-// handPlaceOk(x, hand_distance) accepts).
+// handPlaceOk(x, hand_distance) accepts and, with off_limb, off the tracked hands' limbs).
 bool MpfTracker::bestParticle(const Reclustering& r, int s, double min_obs, double hand_distance,
-                              Eigen::Vector3d* at) const {
+                              Eigen::Vector3d* at, bool off_limb) const {
   double best_w = -1.0;
   for (const P& p : parts_) {
     if (!p.active || p.comp != s || p.obs < min_obs || p.w <= best_w) continue;
     const Eigen::Vector3d x = p.x.cast<double>();
     if (comps_[s].type == Target::kHand && !handPlaceOk(r, x, hand_distance)) continue;
+    if (off_limb && onTrackedLimb(x)) continue;
     best_w = p.w;
     *at = x;
   }
@@ -127,7 +128,9 @@ void MpfTracker::seedSplitMeans(Reclustering* r) const {
     if (r->hand_means >= 2) break;
     if (!comps_[s].active) continue;
     Eigen::Vector3d at;
-    if (bestParticle(*r, s, params_.hand_init_weight, params_.split_distance, &at)) {
+    // Not on the limb of a tracked hand (MpfParams::birth_limb_fraction): a hand's particles
+    // that spread up a bare forearm would split off a track at the elbow.
+    if (bestParticle(*r, s, params_.hand_init_weight, params_.split_distance, &at, true)) {
       r->means.push_back({at, Target::kHand, -1});
       ++r->hand_means;
     }

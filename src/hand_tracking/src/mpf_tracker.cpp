@@ -13,12 +13,21 @@
 #include "hand_tracking/body_top.h"
 #include "hand_tracking/distal_centroid.h"
 #include "hand_tracking/resampling.h"
+#include "hand_tracking/skin_path.h"
 
 namespace hand_tracking {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+// Half edge (m) of the box in which the distal cut weighs the body that is not skin around an
+// arm's end: a sleeve or upper arm within 5 cm of the elbow, past the hull's smear.
+constexpr double kForeignProbeHalf = 0.05;
+// The limb test's cube around each point of the line (skin_path.h): 5 cm, and a quarter of it
+// skin. A point 4 cm from the axis of a 7 cm forearm still counts; in the air between two
+// hands nothing does.
+constexpr double kLimbProbeHalf = 0.025;
+constexpr double kLimbProbeSkin = 0.25;
 double msSince(Clock::time_point t) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
 }
@@ -280,6 +289,16 @@ void MpfTracker::activate(int s, const Eigen::Vector3d& at) {
   c.estimate = at;
 }
 
+bool MpfTracker::onTrackedLimb(const Eigen::Vector3d& x) const {
+  if (!(params_.birth_limb_fraction > 0.0)) return false;
+  for (const Component& o : comps_)
+    if (o.active && o.type == Target::kHand &&
+        skinPathFraction(skin_iv_, x, o.estimate, kLimbProbeHalf, kLimbProbeSkin) >=
+            params_.birth_limb_fraction)
+      return true;
+  return false;
+}
+
 void MpfTracker::births() {
   for (int s = 0; s < kNumSlots; ++s) {
     Component& c = comps_[s];
@@ -307,6 +326,7 @@ void MpfTracker::births() {
         if (o.active && (o.estimate - x).norm() < min_d) far = false;
       }
       if (!far) continue;
+      if (c.type == Target::kHand && onTrackedLimb(x)) continue;
       best_obs = p.obs;
       best = i;
     }
@@ -421,9 +441,16 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
       }
     double arm = 0.0;  // how surely an arm (distal_centroid.h): blend, so nothing flips
     Eigen::Vector3d end = centre;
-    if (distal && arm_mass > 0.0)
+    if (distal && arm_mass > 0.0) {
+      // Body that is not skin in a 10 cm box (the sleeve, the trunk; distal_centroid.h).
+      const ForeignBodyProbe foreign = [this](const Eigen::Vector3d& p) {
+        const Eigen::Vector3d h = Eigen::Vector3d::Constant(kForeignProbeHalf);
+        return std::clamp(body_iv_.boxMean(p - h, p + h) - skin_iv_.boxMean(p - h, p + h), 0.0, 1.0);
+      };
       end = distalCentroid(voxels, arm_sum / arm_mass, comps_[kHeadSlot].estimate,
-                           params_.hand_distal_length, &arm);
+                           params_.hand_distal_length, &arm,
+                           params_.hand_end_by_body ? foreign : ForeignBodyProbe());
+    }
     if (!(mass > 0.0) && !(arm > 0.0)) return centre;
     centre = mass > 0.0 ? Eigen::Vector3d((1.0 - arm) * (sum / mass) + arm * end) : end;
   }

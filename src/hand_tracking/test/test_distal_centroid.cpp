@@ -95,3 +95,30 @@ TEST(DistalCentroid, ArmWeightRisesSmoothlyWithTheLength) {
     last = w;
   }
 }
+
+TEST(DistalCentroid, ARaisedForearmsHandIsTheEndWithoutBodyBeyondIt) {
+  // A forearm raised to wave: elbow at z = 0.29 m beside the trunk, hand up at z = 0.52 m, the
+  // hand nearer the head (0.32 m) than the elbow (0.43 m). The head's rule cuts at the elbow;
+  // with the sleeve (body that is not skin) around the elbow, the cut keeps the hand.
+  const Vector3d head(0.0, -0.42, 0.49);
+  std::vector<WeightedPoint> arm;
+  addBox(Vector3d(0.37, -0.44, 0.27), Vector3d(0.41, -0.40, 0.45), &arm);  // forearm, 4 cm
+  std::vector<WeightedPoint> hand;
+  addBox(Vector3d(0.35, -0.45, 0.45), Vector3d(0.43, -0.42, 0.60), &hand);  // flat hand
+  arm.insert(arm.end(), hand.begin(), hand.end());
+  const Vector3d c = centroidOf(arm), truth = centroidOf(hand);
+  // The sleeve: body that is not skin below z = 0.30 around the arm.
+  const auto sleeve = [](const Vector3d& p) { return p.z() < 0.32 ? 0.6 : 0.05; };
+  const Vector3d by_head = distalCentroid(arm, c, head, 0.17);
+  const Vector3d by_body = distalCentroid(arm, c, head, 0.17, nullptr, sleeve);
+  std::printf("head's rule %.1f mm from the hand, with the sleeve %.1f mm\n",
+              1e3 * (by_head - truth).norm(), 1e3 * (by_body - truth).norm());
+  EXPECT_LT(by_head.z(), c.z());  // the elbow's end, as before
+  EXPECT_LT((by_body - truth).norm(), 0.03);
+  // Both ends alike (a hand on the chest, say): the head's rule decides.
+  const auto same = [](const Vector3d&) { return 0.4; };
+  EXPECT_EQ(distalCentroid(arm, c, head, 0.17, nullptr, same), by_head);
+  // An end only a little fuller than the other (within kForeignMargin): no change either.
+  const auto slight = [](const Vector3d& p) { return p.z() < 0.32 ? 0.45 : 0.4; };
+  EXPECT_EQ(distalCentroid(arm, c, head, 0.17, nullptr, slight), by_head);
+}

@@ -8,6 +8,7 @@
 // `head` count, and their weighted centroid is returned; otherwise `centroid` unchanged.
 #pragma once
 
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -22,8 +23,16 @@ using WeightedPoint = std::pair<Eigen::Vector3d, double>;  // position (m), weig
 // to 1, rising over the first 5 cm of extent past the threshold and from a variance ratio of
 // 2.25 to 3, so that a caller can blend and a blob near the threshold does not flip between
 // the two answers from frame to frame.
+// foreign (may be empty): how much body that is not this blob's skin lies around a point
+// (0..1). When given, the end with more of it around than the other end by kForeignMargin is
+// taken for the elbow (the upper arm, sleeved or not, goes on from there; a hand ends in free
+// space or on the desk), whatever the head says: a forearm raised to wave has its hand nearer
+// the head than its elbow, and the head alone picked the elbow.
+using ForeignBodyProbe = std::function<double(const Eigen::Vector3d&)>;
+constexpr double kForeignMargin = 0.1;
 Eigen::Vector3d distalCentroid(const std::vector<WeightedPoint>& voxels,
                                const Eigen::Vector3d& centroid, const Eigen::Vector3d& head,
-                               double length, double* arm_weight = nullptr);
+                               double length, double* arm_weight = nullptr,
+                               const ForeignBodyProbe& foreign = {});
 
 }  // namespace hand_tracking

@@ -97,6 +97,12 @@ struct MpfParams {
   double hand_init_weight = 0.25;
   double birth_min_distance = 0.15;  // m
   double birth_spread = 0.02;        // m, std of the new component's particles around the find
+  // A hand track is not born, nor split off, where the straight line to a tracked hand's
+  // particle mean runs through skin over at least this fraction of its length: that is the
+  // same limb (skin_path.h: with bare forearms the elbow fills a palm box better than a flat
+  // hand, and the second track was born there while the other hand went unseen). Across the
+  // air between two hands the fraction is below 0.3. 0 = off.
+  double birth_limb_fraction = 0.7;
   double search_skin_threshold = 0.5;
   double search_skin_fraction = 0.5;
 
@@ -153,6 +159,12 @@ struct MpfParams {
   // Edge (m) of the box, centred like the one above, in which the distal cut looks for an arm:
   // it must hold more than a hand with the hull's smear (0.17 + 0.05 m) along a diagonal arm.
   double hand_arm_box = 0.32;
+  // Which end of that arm is the hand: true: the end with less body that is not skin around it
+  // (the sleeve goes on from the elbow; distal_centroid.h), the head's rule where the two ends
+  // differ by less than 0.1; false: the end away from the head only. A forearm raised to wave
+  // or bent towards the body has its hand nearer the head than its elbow: the head's rule
+  // reported the elbow.
+  bool hand_end_by_body = true;
   // Head: a head-sized box and every voxel (the hull's fringe around the face reaches into the
   // hair and balances the face towards the head's centre). On the simulated rig it leaves the
   // mean error as it is and halves the worst case (the particle mean follows the face as the

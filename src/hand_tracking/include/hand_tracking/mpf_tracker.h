@@ -139,6 +139,8 @@ class MpfTracker {
   // Weighted particle mean and its observation; weights w (before normalisation) or wn.
   void updateEstimate(int slot, bool normalised);
   void births();
+  // Whether skin joins x to a tracked hand (MpfParams::birth_limb_fraction).
+  bool onTrackedLimb(const Eigen::Vector3d& x) const;
   void activate(int slot, const Eigen::Vector3d& at);
   void assignIdentity(int slot, const Eigen::Vector3d& at);
   // Marks a track ended (lost, or merged into another slot) and remembers its identity;
@@ -152,8 +154,9 @@ class MpfTracker {
   struct Reclustering;
   void reconfigure();
   bool handPlaceOk(const Reclustering& r, const Eigen::Vector3d& x, double hand_distance) const;
+  // off_limb: only where onTrackedLimb() is false (a split's seed).
   bool bestParticle(const Reclustering& r, int slot, double min_obs, double hand_distance,
-                    Eigen::Vector3d* at) const;
+                    Eigen::Vector3d* at, bool off_limb = false) const;
   void seedHeadMean(Reclustering* r) const;
   void seedHandMeans(Reclustering* r) const;
   void seedSplitMeans(Reclustering* r) const;
