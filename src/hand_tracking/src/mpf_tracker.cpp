@@ -21,7 +21,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 // Half edge (m) of the box in which the distal cut weighs the body that is not skin around an
-// arm's end: a sleeve or upper arm within 5 cm of the elbow, past the hull's smear.
+// arm's end: a sleeve within 5 cm of the elbow counts (the hull smears a limb by ~3 voxels).
 constexpr double kForeignProbeHalf = 0.05;
 // The limb test's cube around each point of the line (skin_path.h): 5 cm, and a quarter of it
 // skin. A point 4 cm from the axis of a 7 cm forearm still counts; in the air between two
@@ -401,6 +401,14 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
       distal ? half.cwiseMax(Eigen::Vector3d::Constant(0.5 * params_.hand_arm_box)) : half;
   const double threshold = hand ? params_.hand_centroid_threshold : params_.head_centroid_threshold;
   const uint8_t thr = static_cast<uint8_t>(std::floor(255.0 * threshold));
+  // Body that is not skin in a 10 cm box (the sleeve, the trunk; distal_centroid.h).
+  ForeignBodyProbe foreign;
+  if (distal && params_.hand_end_by_body)
+    foreign = [this](const Eigen::Vector3d& p) {
+      const Eigen::Vector3d h = Eigen::Vector3d::Constant(kForeignProbeHalf);
+      const double body = body_iv_.boxMean(p - h, p + h), skin = skin_iv_.boxMean(p - h, p + h);
+      return std::clamp(body - skin, 0.0, 1.0);
+    };
   Eigen::Vector3d centre = c.estimate;
   for (int it = 0; it < params_.centroid_iterations; ++it) {
     Eigen::Vector3i lo, hi;
@@ -441,16 +449,9 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
       }
     double arm = 0.0;  // how surely an arm (distal_centroid.h): blend, so nothing flips
     Eigen::Vector3d end = centre;
-    if (distal && arm_mass > 0.0) {
-      // Body that is not skin in a 10 cm box (the sleeve, the trunk; distal_centroid.h).
-      const ForeignBodyProbe foreign = [this](const Eigen::Vector3d& p) {
-        const Eigen::Vector3d h = Eigen::Vector3d::Constant(kForeignProbeHalf);
-        return std::clamp(body_iv_.boxMean(p - h, p + h) - skin_iv_.boxMean(p - h, p + h), 0.0, 1.0);
-      };
+    if (distal && arm_mass > 0.0)
       end = distalCentroid(voxels, arm_sum / arm_mass, comps_[kHeadSlot].estimate,
-                           params_.hand_distal_length, &arm,
-                           params_.hand_end_by_body ? foreign : ForeignBodyProbe());
-    }
+                           params_.hand_distal_length, &arm, foreign);
     if (!(mass > 0.0) && !(arm > 0.0)) return centre;
     centre = mass > 0.0 ? Eigen::Vector3d((1.0 - arm) * (sum / mass) + arm * end) : end;
   }

@@ -90,15 +90,19 @@ TEST(DistalCentroid, ArmWeightRisesSmoothlyWithTheLength) {
     EXPECT_LE(w, 1.0);
     EXPECT_GE(w, last - 1e-12) << "length " << len;
     EXPECT_LE(w - last, 0.33) << "length " << len;
-    if (len < 0.22 - 1e-9) EXPECT_EQ(w, 0.0) << "length " << len;
-    if (len > 0.28) EXPECT_EQ(w, 1.0) << "length " << len;
+    if (len < 0.22 - 1e-9) {
+      EXPECT_EQ(w, 0.0) << "length " << len;
+    }
+    if (len > 0.28) {
+      EXPECT_EQ(w, 1.0) << "length " << len;
+    }
     last = w;
   }
 }
 
 TEST(DistalCentroid, ARaisedForearmsHandIsTheEndWithoutBodyBeyondIt) {
-  // A forearm raised to wave: elbow at z = 0.29 m beside the trunk, hand up at z = 0.52 m, the
-  // hand nearer the head (0.32 m) than the elbow (0.43 m). The head's rule cuts at the elbow;
+  // A forearm raised to wave: elbow at z = 0.27 m beside the trunk, hand up at z = 0.45-0.60 m,
+  // the hand nearer the head (0.39 m) than the elbow (0.45 m). The head's rule cuts at the elbow;
   // with the sleeve (body that is not skin) around the elbow, the cut keeps the hand.
   const Vector3d head(0.0, -0.42, 0.49);
   std::vector<WeightedPoint> arm;
@@ -107,7 +111,7 @@ TEST(DistalCentroid, ARaisedForearmsHandIsTheEndWithoutBodyBeyondIt) {
   addBox(Vector3d(0.35, -0.45, 0.45), Vector3d(0.43, -0.42, 0.60), &hand);  // flat hand
   arm.insert(arm.end(), hand.begin(), hand.end());
   const Vector3d c = centroidOf(arm), truth = centroidOf(hand);
-  // The sleeve: body that is not skin below z = 0.30 around the arm.
+  // The sleeve: body that is not skin below z = 0.32 around the arm.
   const auto sleeve = [](const Vector3d& p) { return p.z() < 0.32 ? 0.6 : 0.05; };
   const Vector3d by_head = distalCentroid(arm, c, head, 0.17);
   const Vector3d by_body = distalCentroid(arm, c, head, 0.17, nullptr, sleeve);

@@ -560,40 +560,55 @@ TEST(MpfTracker, DeterministicForASeedWhateverTheThreadCount) {
   }
 }
 
-// A bare forearm (short sleeves) joins the one visible hand to an elbow that fills a palm box
+// A bare forearm (rolled sleeves) joins the one visible hand to an elbow that fills a palm box
 // better than a hand does; the other hand is not seen (it rests on a desk of its colour). The
-// second hand track must not be born on that forearm (birth_limb_fraction, skin_path.h).
-TEST(MpfTracker, NoSecondHandIsBornOnTheTrackedHandsForearm) {
-  const Vector3d elbow(0.42, -0.25, 0.12);
-  auto run = [&](bool limb_test, Vector3d* second) {
-    MpfParams p;  // the defaults, with the limb test or without
-    if (!limb_test) p.birth_limb_fraction = 0.0;
+// second hand track must not be born or split off on that forearm (birth_limb_fraction,
+// skin_path.h), and the one hand track must report the hand, not the elbow: the forearm points
+// towards the head's side, so only the sleeve at the elbow tells the ends apart
+// (hand_end_by_body, distal_centroid.h).
+TEST(MpfTracker, OneBareArmGivesOneHandTrackAtItsHand) {
+  const Vector3d elbow(0.42, -0.25, 0.12), shoulder(0.20, -0.42, 0.33), hand(0.12, -0.15, 0.20);
+  struct Result {
+    int most_hands = 0;         // most hand tracks at once
+    double elbow_track = NAN;   // m from the elbow of the last track > 0.1 m from the hand
+    double hand_error = NAN;    // m, the track nearest the hand, last frame
+  };
+  auto run = [&](const MpfParams& p) {
     MpfTracker tracker(p, 1);
     Scene s;
     s.hand_on[0] = false;
-    s.hands[1] = Vector3d(0.12, -0.15, 0.20);
+    s.hands[1] = hand;
     psfs::ProbabilityVolume skin, body;
-    int most = 0;
+    Result res;
     for (int f = 0; f < 30; ++f) {
       render(s, 1000 + f, &skin, &body);
-      for (psfs::ProbabilityVolume* v : {&skin, &body}) fillCapsule(v, elbow, s.hands[1], 0.035, 230);
+      for (psfs::ProbabilityVolume* v : {&skin, &body}) fillCapsule(v, elbow, hand, 0.035, 230);
+      fillCapsule(&body, elbow, shoulder, 0.045, 240);  // the rolled sleeve, from the elbow
       const auto& t = tracker.update(skin, body, 0.04);
-      most = std::max(most, activeHands(t));
-      const Target* far = nullptr;
+      res.most_hands = std::max(res.most_hands, activeHands(t));
       for (size_t i = 1; i < t.size(); ++i)
-        if (t[i].active && (t[i].position - s.hands[1]).norm() > 0.1) far = &t[i];
-      if (far) *second = far->position;
+        if (t[i].active && (t[i].position - hand).norm() > 0.1)
+          res.elbow_track = (t[i].position - elbow).norm();
+      const Target* near = handNear(t, hand);
+      res.hand_error = near ? (near->position - hand).norm() : NAN;
     }
-    return most;
+    return res;
   };
-  Vector3d second_off = Vector3d::Constant(NAN), second_on = Vector3d::Constant(NAN);
-  const int off = run(false, &second_off), on = run(true, &second_on);
-  std::printf("[ figures  ] bare forearm, one hand seen: most hand tracks %d without the limb test "
-              "(second %.0f mm from the elbow), %d with it\n", off,
-              1e3 * (second_off - elbow).norm(), on);
-  EXPECT_EQ(off, 2);  // what the test guards against: a track on the forearm
-  EXPECT_LT((second_off - elbow).norm(), 0.20);
-  EXPECT_EQ(on, 1);
+  MpfParams no_limb_test, by_head;
+  no_limb_test.birth_limb_fraction = 0.0;
+  by_head.hand_end_by_body = false;
+  const Result off = run(no_limb_test), on = run(MpfParams()), head_rule = run(by_head);
+  std::printf("[ figures  ] one bare arm: without the limb test %d hand tracks (one %.0f mm from "
+              "the elbow); defaults %d, %.0f mm from the hand; hand end by the head %.0f mm\n",
+              off.most_hands, 1e3 * off.elbow_track, on.most_hands, 1e3 * on.hand_error,
+              1e3 * head_rule.hand_error);
+  EXPECT_EQ(off.most_hands, 2);  // what the limb test guards against: a track on the forearm
+  EXPECT_LT(off.elbow_track, 0.20);
+  EXPECT_EQ(on.most_hands, 1);
+  EXPECT_TRUE(std::isnan(on.elbow_track));
+  // The cut's 17 cm hold the hand and its wrist: their centroid lies ~4 cm up the arm.
+  EXPECT_LT(on.hand_error, 0.06);
+  EXPECT_GT(head_rule.hand_error, 0.15);  // the elbow end
 }
 
 TEST(MpfTracker, FrontalPlaneMakesForearmsUnlikeHands) {

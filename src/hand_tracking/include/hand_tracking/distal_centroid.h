@@ -4,8 +4,9 @@
 // elongated (their long axis' variance > 2.25x the next one's, i.e. 1.5x the spread: a flat
 // open hand alone is about 19 x 9 cm, 1.4:1 in spread at 16 mm voxels) and longer than
 // `length` + 5 cm along that axis (the hull smears a hand by about 3 voxels at 16 mm: a hand
-// alone in long sleeves must not be cut), only the voxels within `length` of the end pointing away from
-// `head` count, and their weighted centroid is returned; otherwise `centroid` unchanged.
+// alone in long sleeves must not be cut), only the voxels within `length` of the hand's end
+// count (the end away from `head`, or the one the body around the ends tells: `foreign`
+// below), and their weighted centroid is returned; otherwise `centroid` unchanged.
 #pragma once
 
 #include <functional>
@@ -23,11 +24,12 @@ using WeightedPoint = std::pair<Eigen::Vector3d, double>;  // position (m), weig
 // to 1, rising over the first 5 cm of extent past the threshold and from a variance ratio of
 // 2.25 to 3, so that a caller can blend and a blob near the threshold does not flip between
 // the two answers from frame to frame.
-// foreign (may be empty): how much body that is not this blob's skin lies around a point
-// (0..1). When given, the end with more of it around than the other end by kForeignMargin is
-// taken for the elbow (the upper arm, sleeved or not, goes on from there; a hand ends in free
-// space or on the desk), whatever the head says: a forearm raised to wave has its hand nearer
-// the head than its elbow, and the head alone picked the elbow.
+// foreign (may be empty): how much body that is not skin lies around a point (0..1). When
+// given, the end with more of it around than the other end by kForeignMargin is taken for the
+// elbow (a rolled or short sleeve goes on from there; a hand ends in free space or on the
+// desk), whatever the head says: a forearm raised to wave or bent towards the body has its
+// hand nearer the head than its elbow, and the head alone picked the elbow. Where the ends
+// differ less (a bare upper arm is skin too; a hand on a shirt), the head decides.
 using ForeignBodyProbe = std::function<double(const Eigen::Vector3d&)>;
 constexpr double kForeignMargin = 0.1;
 Eigen::Vector3d distalCentroid(const std::vector<WeightedPoint>& voxels,

@@ -100,8 +100,10 @@ struct MpfParams {
   // A hand track is not born, nor split off, where the straight line to a tracked hand's
   // particle mean runs through skin over at least this fraction of its length: that is the
   // same limb (skin_path.h: with bare forearms the elbow fills a palm box better than a flat
-  // hand, and the second track was born there while the other hand went unseen). Across the
-  // air between two hands the fraction is below 0.3. 0 = off.
+  // hand, and the second track was born there while the other hand went unseen). Two hands
+  // side by side read 0.67 at 15 cm between centres, 0.44 at 20 and 0.25 at 36 cm; hands with
+  // the finger tips towards each other count as one limb until the tips are about 7 cm apart,
+  // as clasped hands are one target. 0 = off.
   double birth_limb_fraction = 0.7;
   double search_skin_threshold = 0.5;
   double search_skin_fraction = 0.5;
@@ -152,18 +154,18 @@ struct MpfParams {
   // Distal cut of that centroid (m, 0 = off; distal_centroid.h): with short or rolled sleeves
   // the forearm is skin as well, and the box's centroid slid 9-18 cm down the arm on generated
   // scenarios. When the skin in the larger hand_arm_box is elongated and longer than this plus
-  // the hull's smear, the centroid of the voxels within this length of its end away from the
-  // head is reported instead (needs a tracked head). A hand is 16-21 cm from wrist to finger
-  // tips; 0.17 m keeps an open hand whole and drops most of the forearm.
+  // the hull's smear, the centroid of the voxels within this length of its hand end
+  // (hand_end_by_body) is reported instead (needs a tracked head). A hand is 16-21 cm from
+  // wrist to finger tips; 0.17 m keeps an open hand whole and drops most of the forearm.
   double hand_distal_length = 0.17;
   // Edge (m) of the box, centred like the one above, in which the distal cut looks for an arm:
   // it must hold more than a hand with the hull's smear (0.17 + 0.05 m) along a diagonal arm.
   double hand_arm_box = 0.32;
   // Which end of that arm is the hand: true: the end with less body that is not skin around it
   // (the sleeve goes on from the elbow; distal_centroid.h), the head's rule where the two ends
-  // differ by less than 0.1; false: the end away from the head only. A forearm raised to wave
-  // or bent towards the body has its hand nearer the head than its elbow: the head's rule
-  // reported the elbow.
+  // differ by less than kForeignMargin (0.1); false: the end away from the head only. A
+  // forearm raised to wave or bent towards the body has its hand nearer the head than its
+  // elbow: the head's rule reported the elbow.
   bool hand_end_by_body = true;
   // Head: a head-sized box and every voxel (the hull's fringe around the face reaches into the
   // hair and balances the face towards the head's centre). On the simulated rig it leaves the
