@@ -24,8 +24,8 @@ using Clock = std::chrono::steady_clock;
 // arm's end: a sleeve within 5 cm of the elbow counts (the hull smears a limb by ~3 voxels).
 constexpr double kForeignProbeHalf = 0.05;
 // The limb test's cube around each point of the line (skin_path.h): 5 cm, and a quarter of it
-// skin. A point 4 cm from the axis of a 7 cm forearm still counts; in the air between two
-// hands nothing does.
+// skin. A point 4 cm from the axis of a 7 cm forearm still counts; a point in the air more
+// than ~2 cm from any skin does not.
 constexpr double kLimbProbeHalf = 0.025;
 constexpr double kLimbProbeSkin = 0.25;
 double msSince(Clock::time_point t) {

@@ -1,9 +1,9 @@
 // Whether two points lie on one skin blob along the straight line between them. With bare
 // forearms a hand and its own forearm or elbow are one blob: the elbow fills a palm box better
 // than a flat hand does, and a second hand track was born there while the other hand rested
-// unseen (generated scenarios, short sleeves). A hand track is not born
-// where skin joins it to an existing hand track; the other hand is joined to it only through
-// the body, which is no straight skin line.
+// unseen (generated scenarios, short sleeves). A hand track is not born where skin joins it to
+// an existing hand track; the other hand is joined to it only through the body, which is no
+// straight skin line, unless the two touch (clasped hands are one target anyway).
 // Each point of the line counts when the skin fills enough of a small cube around it, not
 // only its own voxel: the strongest particles of a box likelihood lie on an arm's surface or
 // beside it (a 9 cm box half over a 7 cm arm), and a line from there starts off the skin.
