@@ -10,6 +10,7 @@
 #include "hand_tracking/integral_volume.h"
 #include "hand_tracking/skin_path.h"
 #include "psfs_reconstruction/voxel_grid.h"
+#include "tabletop_sim/primitives.h"
 
 namespace hand_tracking {
 namespace {
@@ -23,17 +24,15 @@ psfs::ProbabilityVolume emptySkin() {
   return v;
 }
 
-// Skin (0.9) in a cylinder of radius r along [a, b] (voxel centres).
+// Skin (0.9) in the simulator's capsule of radius r around [a, b] (its inside test).
 void paintRod(psfs::ProbabilityVolume* v, const Vector3d& a, const Vector3d& b, double r) {
+  const tabletop_sim::Primitive cap = tabletop_sim::Primitive::capsule(
+      a, b, r, tabletop_sim::Material::SKIN, tabletop_sim::BodyPart::TORSO);
   const psfs::VoxelGrid& g = v->grid;
-  const Vector3d ab = b - a;
-  for (int z = 0; z < g.dims.z(); ++z)
-    for (int y = 0; y < g.dims.y(); ++y)
-      for (int x = 0; x < g.dims.x(); ++x) {
-        const Vector3d p = g.centre(x, y, z);
-        const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-        if ((a + t * ab - p).norm() <= r) v->data[g.index(x, y, z)] = 230;
-      }
+  for (size_t i = 0; i < v->data.size(); ++i) {
+    const Eigen::Vector3i c = g.coords(i);
+    if (cap.contains(g.centre(c.x(), c.y(), c.z()))) v->data[i] = 230;
+  }
 }
 
 constexpr double kHalf = 0.025, kMin = 0.25;  // the tracker's cube and fill (mpf_tracker.cpp)
