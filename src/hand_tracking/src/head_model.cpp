@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -63,6 +64,7 @@ void HeadModelParams::validate() const {
   if (!(threshold >= 0.0 && threshold < 1.0)) fail("threshold", "must lie in [0, 1)");
   if (iterations < 1) fail("iterations", "must be >= 1");
   positive(top_above_centre, "top_above_centre");
+  if (!(vertex_weight >= 0.0 && vertex_weight <= 1.0)) fail("vertex_weight", "must lie in [0, 1]");
 }
 
 HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d& face,
@@ -126,18 +128,34 @@ HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d
   const double fill = a_below > 0.0 ? std::clamp(areas[0] / a_below, 0.0, 1.0) : 1.0;
   fit.top = z_top - 0.5 * s + fill * s;
   fit.levels = n;
-  if (n < 3) return fit;
-  const Eigen::Vector3d c = ata.ldlt().solve(atb);
-  if (!c.allFinite() || !(c[2] < 0.0)) return fit;  // not a blob with a widest level
-  const double u_vertex = -c[1] / (2.0 * c[2]);
-  const double u_min = levelZ(top - n + 1) - z_top;
-  if (!(u_vertex <= 0.0 && u_vertex >= u_min)) return fit;
   fit.clipped = top == g.dims.z() - 1;
-  // The vertex, and unless the top is cut off, the top less the head's height above its
-  // centre: two estimates whose errors come from different things (the hull's shape below the
-  // head's widest level; the hair's and the hull's extent above the head).
-  double z = z_top + u_vertex;
-  if (!fit.clipped) z = 0.5 * z + 0.5 * (fit.top - p.top_above_centre);
+  fit.vertex = std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Vector3d c =
+      n >= 3 ? Eigen::Vector3d(ata.ldlt().solve(atb)) : Eigen::Vector3d::Zero();
+  // A widest level among the fitted ones: a concave profile whose vertex lies in their range.
+  const double u_vertex = c[2] < 0.0 ? -c[1] / (2.0 * c[2]) : 0.0;
+  const double u_min = levelZ(top - n + 1) - z_top;
+  if (n >= 3 && c.allFinite() && c[2] < 0.0 && u_vertex <= 0.0 && u_vertex >= u_min)
+    fit.vertex = z_top + u_vertex;
+  const double from_top = fit.top - p.top_above_centre;
+  double z;
+  if (fit.clipped) {
+    // The top is the workspace's ceiling, not the head's: the vertex or nothing. (A bound from
+    // the ceiling, centre >= ceiling - top_above_centre, was tried for random-21, whose head's
+    // top is above the workspace: 58 -> 33 mm, but it flips on and off with the face estimate,
+    // max 74 mm; see docs/benchmarks.md.)
+    if (!std::isfinite(fit.vertex)) return fit;
+    z = fit.vertex;
+  } else if (std::isfinite(fit.vertex)) {
+    // Two estimates whose errors come from different things (the hull's shape below the
+    // head's widest level; the hair's and the hull's extent above the head).
+    z = p.vertex_weight * fit.vertex + (1.0 - p.vertex_weight) * from_top;
+  } else if (n >= 3) {
+    z = from_top;
+    fit.from_top = true;
+  } else {
+    return fit;  // a blob at the grid's floor: no head
+  }
   fit.centre = Eigen::Vector3d(axis.x(), axis.y(), z);
   fit.ok = true;
 

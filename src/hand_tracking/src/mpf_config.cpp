@@ -60,6 +60,7 @@ void addMpfKeys(MpfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("head_fit/min_top_area", &p.head_fit.min_top_area)
       .add("head_fit/iterations", &p.head_fit.iterations)
       .add("head_fit/top_above_centre", &p.head_fit.top_above_centre)
+      .add("head_fit/vertex_weight", &p.head_fit.vertex_weight)
       .add("threads", &p.threads);
   s->add("seed", &c->nodelet.seed)
       .add("publish_particles", &c->nodelet.publish_particles)

@@ -57,8 +57,9 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
   // difference between top_above_centre and the true height (0.115 m bald: -20 mm; 0.14 m
   // with hair: +5 mm); hair lifts the widest level by up to 19 mm and, lying at the back,
   // moves the axis back by as much. The top is read to a fraction of a level from the areas,
-  // which on a cap is low by up to a voxel (16 mm). Bald: half of 20 + 16 mm from the top, half
-  // of the vertex's 8 mm: 22 mm; with hair within 12 mm in z and 19 mm in y, plus 8 mm.
+  // which on a cap is low by up to a voxel (16 mm). Bald: half of 20 + 16 mm from the top
+  // (vertex_weight 0.5), half of the vertex's 8 mm: 22 mm; with hair within 12 mm in z and
+  // 19 mm in y, plus 8 mm.
   const Vector3d centre(0.03, -0.30, 0.55);
   const Vector3d face = centre + Vector3d(0.0, 0.07, -0.04);
   for (int hair : {0, 1}) {
@@ -66,6 +67,8 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
     const auto fit = fitHeadCentre(v, face, HeadModelParams());
     ASSERT_TRUE(fit.ok) << "hair " << hair;
     EXPECT_FALSE(fit.clipped);
+    EXPECT_FALSE(fit.from_top);  // the blend of vertex and top, not the top alone
+    EXPECT_TRUE(std::isfinite(fit.vertex));
     const Vector3d e = fit.centre - centre;
     std::printf("hair %d: centre error (%.1f, %.1f, %.1f) mm, face was %.1f mm off; top %.3f m, "
                 "%d levels\n", hair, 1e3 * e.x(), 1e3 * e.y(), 1e3 * e.z(),
@@ -74,6 +77,49 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
     EXPECT_LT(e.norm(), hair ? std::hypot(0.012, 0.019) + 0.008 : 0.022);
     EXPECT_LT(e.norm(), (face - centre).norm() / 3);
   }
+}
+
+TEST(HeadModel, AProfileWithoutAWidestLevelGivesTheTopBasedCentre) {
+  // Long hair spread down over the shoulders like a cone from the crown: the blob's area only
+  // grows downwards, so there is no vertex. The centre comes from the top alone, not from the
+  // face (81 mm off; before: the face was reported): the head's 0.14 m with hair against
+  // top_above_centre 0.135 m puts it 5 mm high, and the top's fractional read of a cap is
+  // low by up to a voxel (15.6 mm): -10.6..+5 mm in z.
+  const Vector3d centre(0.03, -0.30, 0.50);
+  const Vector3d face = centre + Vector3d(0.0, 0.07, -0.04);
+  auto body = person(centre, 1);
+  const psfs::ProbabilityVolume v = volume([&](const Vector3d& p) {
+    const double below_top = centre.z() + 0.14 - p.z();
+    return body(p) || (below_top > 0.0 && below_top < 0.25 &&
+                       (p - centre).head<2>().norm() < 0.13 * below_top / 0.20);
+  });
+  const auto fit = fitHeadCentre(v, face, HeadModelParams());
+  ASSERT_TRUE(fit.ok);
+  EXPECT_TRUE(fit.from_top);
+  EXPECT_FALSE(fit.clipped);
+  EXPECT_FALSE(std::isfinite(fit.vertex));
+  EXPECT_NEAR(fit.centre.z(), fit.top - HeadModelParams().top_above_centre, 1e-12);
+  const Vector3d e = fit.centre - centre;
+  std::printf("no vertex: centre error (%.1f, %.1f, %.1f) mm\n", 1e3 * e.x(), 1e3 * e.y(),
+              1e3 * e.z());
+  EXPECT_GT(e.z(), 0.005 - 1.0 / 64 - 1e-3);
+  EXPECT_LT(e.z(), 0.005 + 1e-3);
+  EXPECT_LT(std::abs(e.x()), 0.008);  // the blob is symmetric in x: within half a voxel
+  EXPECT_LT(e.norm(), (face - centre).norm() / 3);
+
+  // The same head with its top above the workspace's ceiling (0.75 m): the top is unknown and
+  // there is no vertex, so the fit gives up and the face estimate stays.
+  const Vector3d tall(0.03, -0.30, 0.64);
+  const psfs::ProbabilityVolume cut = volume([&](const Vector3d& p) {
+    const double below_top = tall.z() + 0.14 - p.z();
+    return person(tall, 1)(p) || (below_top > 0.0 && below_top < 0.25 &&
+                                  (p - tall).head<2>().norm() < 0.13 * below_top / 0.20);
+  });
+  const Vector3d tall_face = tall + Vector3d(0.0, 0.07, -0.04);
+  const auto cut_fit = fitHeadCentre(cut, tall_face, HeadModelParams());
+  EXPECT_FALSE(cut_fit.ok);
+  EXPECT_TRUE(cut_fit.clipped);
+  EXPECT_EQ(cut_fit.centre, tall_face);
 }
 
 TEST(HeadModel, HeadCutOffByTheWorkspaceCeiling) {
@@ -124,6 +170,9 @@ TEST(HeadModel, ImplausibleInputLeavesTheFaceEstimate) {
 TEST(HeadModel, ValidatesParameters) {
   HeadModelParams p;
   p.radius = 0.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = HeadModelParams();
+  p.vertex_weight = 1.5;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = HeadModelParams();
   p.threshold = 1.0;

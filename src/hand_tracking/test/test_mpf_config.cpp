@@ -67,6 +67,15 @@ TEST(MpfConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.params.head_centroid_box, d.head_centroid_box);
   EXPECT_EQ(c.params.head_centroid_threshold, d.head_centroid_threshold);
   EXPECT_EQ(c.params.centroid_iterations, d.centroid_iterations);
+  EXPECT_EQ(c.params.head_model, d.head_model);
+  EXPECT_EQ(c.params.head_fit.radius, d.head_fit.radius);
+  EXPECT_EQ(c.params.head_fit.max_above, d.head_fit.max_above);
+  EXPECT_EQ(c.params.head_fit.fit_depth, d.head_fit.fit_depth);
+  EXPECT_EQ(c.params.head_fit.threshold, d.head_fit.threshold);
+  EXPECT_EQ(c.params.head_fit.min_top_area, d.head_fit.min_top_area);
+  EXPECT_EQ(c.params.head_fit.iterations, d.head_fit.iterations);
+  EXPECT_EQ(c.params.head_fit.top_above_centre, d.head_fit.top_above_centre);
+  EXPECT_EQ(c.params.head_fit.vertex_weight, d.head_fit.vertex_weight);
   EXPECT_EQ(c.params.threads, d.threads);
   EXPECT_EQ(c.nodelet.seed, n.seed);
   EXPECT_EQ(c.nodelet.publish_particles, n.publish_particles);

@@ -15,17 +15,25 @@
 //      cylinder;
 //   3. the centre's height: the vertex of a least-squares parabola through A(z) over the levels
 //      from the top down to fit_depth below it (the neck's narrowing is below that);
-//   4. the centre: the axis at the mean of that height and the top less top_above_centre
-//      (the vertex alone only where the top is cut off by the workspace's ceiling).
+//   4. the centre: the axis at a weighted mean of that height (vertex_weight) and the top
+//      less top_above_centre (the vertex alone where the top is cut off by the workspace's
+//      ceiling; the top alone where the profile has no plausible vertex).
 // On generated scenarios the hull's cross-section is not an ellipse's: cameras looking down
-// leave phantom volume around the head's upper half (vertex up to +30 mm), and hair or the
-// hull lift the top (top-based estimate -18..+27 mm). The top is read to a fraction of a
-// level (the top level's area against the one below), or the estimate would step by 8 mm.
-// Over the 24 generated scenarios of docs/scenario_suite.md: 14.8 mm median, 43.7 mm worst
-// decile (the face's skin centroid: 43.7 / 73.0 mm on the first 12 of them).
-// Anything implausible (no top found, a convex or flat profile, a vertex outside the fitted
-// levels) leaves the face estimate as it was, flagged in the result.
+// leave phantom volume around the head's upper half, and the chin, neck and long hair bend
+// the profile, so the vertex scatters: -15..+65 mm from the centre on the pSfS hull, -6..+50
+// mm on the TRUE occupancy (the oracle's voxels; 48 scenarios, docs/benchmarks.md "MPF: the
+// head's centre where the profile has no vertex"); the top less top_above_centre -35..+10 mm
+// (bald or hair, the hull's cap). The top is read to a fraction of a level (the top level's
+// area against the one below), or the estimate would step by 8 mm.
+// Anything implausible (no top found, a column that does not end, fewer than 3 levels, a top
+// at the workspace's ceiling without a vertex) leaves the face estimate as it was, flagged in
+// the result; a profile without a plausible vertex (convex, flat, or its vertex outside the
+// fitted levels: long or background-coloured hair, a hand beside the head) gives the
+// top-based estimate. Before, such frames reported the face, 40-60 mm low: on random-25..48
+// (100 frames) the head's worst decile 28.2 -> 24.2 mm (random-38, 32, 47, 28 moved).
 #pragma once
+
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -54,6 +62,12 @@ struct HeadModelParams {
   // simulator's size, 0.14 m with hair, x0.94-1.06 with the person's size; the hull adds
   // 0-2 cm. 0.135 m splits these.
   double top_above_centre = 0.135;
+  // Weight of the profile's vertex in the centre's height (the top-based estimate has the
+  // rest). The vertex scatters further (see above), but its errors come from different
+  // things than the top's (the hull's shape below the widest level; hair and cap above). On
+  // 48 scenarios 0.25 with top_above_centre 0.13 looked better (head 12.8 -> 11.1 mm median),
+  // but on 24 held-out ones it was not (11.4 -> 11.6 mm; docs/benchmarks.md): kept at 0.5.
+  double vertex_weight = 0.5;
 
   // Throws std::invalid_argument naming the field.
   void validate() const;
@@ -64,7 +78,10 @@ struct HeadFit {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double top = 0.0;                 // z of the head's top (m, world)
   int levels = 0;                   // levels fitted
-  bool clipped = false;             // the head reaches the grid's top (vertex only)
+  bool clipped = false;             // the head reaches the grid's top (vertex only); set
+                                    // whether or not the fit succeeds
+  bool from_top = false;            // no plausible vertex: the centre from the top alone
+  double vertex = std::numeric_limits<double>::quiet_NaN();  // z of the profile's vertex (m)
 };
 
 // Fits the head's centre in the body volume, starting from `face` (world, m).
