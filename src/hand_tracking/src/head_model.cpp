@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -129,14 +128,14 @@ HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d
   fit.top = z_top - 0.5 * s + fill * s;
   fit.levels = n;
   fit.clipped = top == g.dims.z() - 1;
-  fit.vertex = std::numeric_limits<double>::quiet_NaN();
-  const Eigen::Vector3d c =
-      n >= 3 ? Eigen::Vector3d(ata.ldlt().solve(atb)) : Eigen::Vector3d::Zero();
+  if (n < 3) return fit;  // a blob at the grid's floor: no head
   // A widest level among the fitted ones: a concave profile whose vertex lies in their range.
-  const double u_vertex = c[2] < 0.0 ? -c[1] / (2.0 * c[2]) : 0.0;
-  const double u_min = levelZ(top - n + 1) - z_top;
-  if (n >= 3 && c.allFinite() && c[2] < 0.0 && u_vertex <= 0.0 && u_vertex >= u_min)
-    fit.vertex = z_top + u_vertex;
+  const Eigen::Vector3d c = ata.ldlt().solve(atb);
+  if (c.allFinite() && c[2] < 0.0) {
+    const double u_vertex = -c[1] / (2.0 * c[2]);
+    const double u_min = levelZ(top - n + 1) - z_top;
+    if (u_vertex <= 0.0 && u_vertex >= u_min) fit.vertex = z_top + u_vertex;
+  }
   const double from_top = fit.top - p.top_above_centre;
   double z;
   if (fit.clipped) {
@@ -150,11 +149,9 @@ HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d
     // Two estimates whose errors come from different things (the hull's shape below the
     // head's widest level; the hair's and the hull's extent above the head).
     z = p.vertex_weight * fit.vertex + (1.0 - p.vertex_weight) * from_top;
-  } else if (n >= 3) {
+  } else {
     z = from_top;
     fit.from_top = true;
-  } else {
-    return fit;  // a blob at the grid's floor: no head
   }
   fit.centre = Eigen::Vector3d(axis.x(), axis.y(), z);
   fit.ok = true;
