@@ -48,6 +48,7 @@ void addMpfKeys(MpfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("hand_distal_length", &p.hand_distal_length)
       .add("hand_arm_box", &p.hand_arm_box)
       .add("hand_end_by_body", &p.hand_end_by_body)
+      .add("hand_arm_walk", &p.hand_arm_walk)
       .add("refine_head_centroid", &p.refine_head_centroid)
       .add("head_centroid_box", &p.head_centroid_box)
       .add("head_centroid_threshold", &p.head_centroid_threshold)

@@ -82,6 +82,7 @@ void MpfParams::validate() const {
   unit(hand_centroid_threshold, "hand_centroid_threshold");
   nonNegative(hand_distal_length, "hand_distal_length");
   nonNegative(hand_arm_box, "hand_arm_box");
+  nonNegative(hand_arm_walk, "hand_arm_walk");
   unit(head_centroid_threshold, "head_centroid_threshold");
   if (centroid_iterations < 1) fail("centroid_iterations", "must be >= 1");
   head_fit.validate();

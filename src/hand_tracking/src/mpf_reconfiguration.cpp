@@ -6,6 +6,7 @@
 #include "hand_tracking/mpf_tracker.h"
 
 #include <cstddef>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -274,7 +275,9 @@ void MpfTracker::updateReportedEstimates() {
     updateEstimate(s, true);
     const bool refine = c.type == Target::kHand ? params_.refine_hand_centroid
                                                 : params_.refine_head_centroid;
-    c.reported = refine ? refineCentroid(s) : c.estimate;
+    Eigen::Vector3d end = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    c.reported = refine ? refineCentroid(s, &end) : c.estimate;
+    if (end.allFinite()) c.hand_end = end, c.hand_end_frame = frames_;
     if (c.type == Target::kHead && params_.head_model && body_) {
       const HeadFit fit = fitHeadCentre(*body_, c.reported, params_.head_fit);
       if (fit.ok) c.reported = fit.centre;

@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "hand_tracking/arm_geodesic.h"
 #include "hand_tracking/body_top.h"
 #include "hand_tracking/distal_centroid.h"
 #include "hand_tracking/resampling.h"
@@ -23,6 +24,10 @@ using Clock = std::chrono::steady_clock;
 // Half edge (m) of the box in which the distal cut weighs the body that is not skin around an
 // arm's end: a sleeve within 5 cm of the elbow counts (the hull smears a limb by ~3 voxels).
 constexpr double kForeignProbeHalf = 0.05;
+// The arm walk's min_arm_length is hand_distal_length plus this: 0.27 m, a 21 cm hand with the
+// hull's 3 cm of smear at each end (arm_geodesic.h).
+constexpr double kHandAloneSmear = 0.10;
+constexpr double kRootwardRamp = 0.05;  // m
 // The limb test's cube around each point of the line (skin_path.h): 5 cm, and a quarter of it
 // skin. A point 4 cm from the axis of a 7 cm forearm still counts; a point in the air more
 // than ~2 cm from any skin does not.
@@ -385,10 +390,12 @@ void MpfTracker::endTrack(int s, int merged_into, const Eigen::Vector3d& merge_o
   c.inactive_since = time_;
   c.merged_into = merged_into;
   c.merge_offset = merged_into >= 0 ? merge_offset : Eigen::Vector3d::Zero();
+  c.hand_end_frame = 0;
+  c.hand_end = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   ++(merged_into >= 0 ? stats_.merges : stats_.losses);
 }
 
-Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
+Eigen::Vector3d MpfTracker::refineCentroid(int s, Eigen::Vector3d* hand_end) const {
   const Component& c = comps_[s];
   const psfs::VoxelGrid& g = skin_->grid;
   const bool hand = c.type == Target::kHand;
@@ -409,7 +416,15 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
       const double body = body_iv_.boxMean(p - h, p + h), skin = skin_iv_.boxMean(p - h, p + h);
       return std::clamp(body - skin, 0.0, 1.0);
     };
+  // The Voronoi cell of this target among the tracked ones.
+  const auto ownCell = [this, s](const Eigen::Vector3d& p) {
+    const double d = (p - comps_[s].estimate).squaredNorm();
+    for (int t = 0; t < kNumSlots; ++t)
+      if (t != s && comps_[t].active && (p - comps_[t].estimate).squaredNorm() < d) return false;
+    return true;
+  };
   Eigen::Vector3d centre = c.estimate;
+  double box_arm = 0.0;  // the first box's arm weight: whether the skin there is an arm at all
   for (int it = 0; it < params_.centroid_iterations; ++it) {
     Eigen::Vector3i lo, hi;
     for (int a = 0; a < 3; ++a) {
@@ -430,13 +445,7 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
           const uint8_t v = row[x];
           if (v <= thr) continue;
           const Eigen::Vector3d p = g.centre(x, y, z);
-          // Voronoi cell of this target among the tracked ones.
-          const double d = (p - c.estimate).squaredNorm();
-          bool mine = true;
-          for (int t = 0; t < kNumSlots && mine; ++t)
-            if (t != s && comps_[t].active && (p - comps_[t].estimate).squaredNorm() < d)
-              mine = false;
-          if (!mine) continue;
+          if (!ownCell(p)) continue;
           if (distal) {
             voxels.emplace_back(p, double(v));
             arm_sum += v * p;
@@ -452,10 +461,35 @@ Eigen::Vector3d MpfTracker::refineCentroid(int s) const {
     if (distal && arm_mass > 0.0)
       end = distalCentroid(voxels, arm_sum / arm_mass, comps_[kHeadSlot].estimate,
                            params_.hand_distal_length, &arm, foreign);
+    if (it == 0) box_arm = arm;
     if (!(mass > 0.0) && !(arm > 0.0)) return centre;
     centre = mass > 0.0 ? Eigen::Vector3d((1.0 - arm) * (sum / mass) + arm * end) : end;
   }
-  return centre;
+  if (!(box_arm > 0.0) || !(params_.hand_arm_walk > 0.0)) return centre;
+  // A target the other hand merged into holds both hands (clasped, folded): their blob is no arm.
+  const Component& other = comps_[s == 1 ? 2 : 1];
+  if (!other.active && other.merged_into == s) return centre;
+  // The box sees an arm. Where its answer lies at the arm's root (the particles on the elbow
+  // of a stretched or raised bare arm; the box sees neither end), the hand's end along the
+  // skin is reported instead (arm_geodesic.h); where it lies at the hand's end already, the
+  // box's answer stands.
+  ArmWalkParams walk;
+  walk.reach = params_.hand_arm_walk;
+  walk.hand_length = params_.hand_distal_length;
+  walk.min_arm_length = params_.hand_distal_length + kHandAloneSmear;
+  walk.frontal = params_.frontal_direction.normalized();
+  const bool remembered = c.hand_end_frame != 0 && c.hand_end_frame + 1 == frames_;
+  const ArmEnd arm = armHandEnd(*skin_, thr, c.estimate, half.maxCoeff(), ownCell, walk,
+                                comps_[kHeadSlot].estimate, foreign,
+                                remembered ? &c.hand_end : nullptr);
+  if (!(arm.arm_weight > 0.0)) return centre;
+  if (hand_end) *hand_end = arm.hand_end;
+  // How much nearer the root end the box's answer is, over 5 cm: a blend, so that an answer
+  // half-way along the forearm does not flip between the two from frame to frame.
+  const double rootward = ((centre - arm.hand_end).norm() - (centre - arm.other_end).norm()) /
+                          kRootwardRamp;
+  const double w = std::min({arm.arm_weight, box_arm, std::clamp(rootward, 0.0, 1.0)});
+  return (1.0 - w) * centre + w * arm.centroid;
 }
 
 void MpfTracker::publish() {

@@ -63,6 +63,10 @@ TEST(MpfConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.params.refine_hand_centroid, d.refine_hand_centroid);
   EXPECT_EQ(c.params.hand_centroid_box, d.hand_centroid_box);
   EXPECT_EQ(c.params.hand_centroid_threshold, d.hand_centroid_threshold);
+  EXPECT_EQ(c.params.hand_distal_length, d.hand_distal_length);
+  EXPECT_EQ(c.params.hand_arm_box, d.hand_arm_box);
+  EXPECT_EQ(c.params.hand_end_by_body, d.hand_end_by_body);
+  EXPECT_EQ(c.params.hand_arm_walk, d.hand_arm_walk);
   EXPECT_EQ(c.params.refine_head_centroid, d.refine_head_centroid);
   EXPECT_EQ(c.params.head_centroid_box, d.head_centroid_box);
   EXPECT_EQ(c.params.head_centroid_threshold, d.head_centroid_threshold);

@@ -564,8 +564,9 @@ TEST(MpfTracker, DeterministicForASeedWhateverTheThreadCount) {
 // better than a hand does; the other hand is not seen (it rests on a desk of its colour). The
 // second hand track must not be born or split off on that forearm (birth_limb_fraction,
 // skin_path.h), and the one hand track must report the hand, not the elbow: the forearm points
-// towards the head's side, so only the sleeve at the elbow tells the ends apart
-// (hand_end_by_body, distal_centroid.h).
+// towards the head's side, so the head's rule takes the elbow: the sleeve at the elbow
+// (hand_end_by_body, distal_centroid.h) or the walk along the skin (hand_arm_walk,
+// arm_geodesic.h: the hand is in front of the elbow) tells the ends apart.
 TEST(MpfTracker, OneBareArmGivesOneHandTrackAtItsHand) {
   const Vector3d elbow(0.42, -0.25, 0.12), shoulder(0.20, -0.42, 0.33), hand(0.12, -0.15, 0.20);
   struct Result {
@@ -594,14 +595,18 @@ TEST(MpfTracker, OneBareArmGivesOneHandTrackAtItsHand) {
     }
     return res;
   };
-  MpfParams no_limb_test, by_head;
+  MpfParams no_limb_test, by_head, by_head_walk;
   no_limb_test.birth_limb_fraction = 0.0;
   by_head.hand_end_by_body = false;
+  by_head.hand_arm_walk = 0.0;
+  by_head_walk.hand_end_by_body = false;
   const Result off = run(no_limb_test), on = run(MpfParams()), head_rule = run(by_head);
+  const Result head_walk = run(by_head_walk);
   std::printf("[ figures  ] one bare arm: without the limb test %d hand tracks (one %.0f mm from "
-              "the elbow); defaults %d, %.0f mm from the hand; hand end by the head %.0f mm\n",
+              "the elbow); defaults %d, %.0f mm from the hand; hand end by the head %.0f mm, "
+              "and with the arm walk %.0f mm\n",
               off.most_hands, 1e3 * off.elbow_track, on.most_hands, 1e3 * on.hand_error,
-              1e3 * head_rule.hand_error);
+              1e3 * head_rule.hand_error, 1e3 * head_walk.hand_error);
   EXPECT_EQ(off.most_hands, 2);  // what the limb test guards against: a track on the forearm
   EXPECT_LT(off.elbow_track, 0.20);
   EXPECT_EQ(on.most_hands, 1);
@@ -609,6 +614,9 @@ TEST(MpfTracker, OneBareArmGivesOneHandTrackAtItsHand) {
   // The cut's 17 cm hold the hand and its wrist: their centroid lies ~4 cm up the arm.
   EXPECT_LT(on.hand_error, 0.06);
   EXPECT_GT(head_rule.hand_error, 0.15);  // the elbow end
+  // The box's answer at the elbow end: the walk along the skin finds the hand's end (in front of
+  // the elbow; arm_geodesic.h) whatever the box's end rule.
+  EXPECT_LT(head_walk.hand_error, 0.06);
 }
 
 TEST(MpfTracker, FrontalPlaneMakesForearmsUnlikeHands) {

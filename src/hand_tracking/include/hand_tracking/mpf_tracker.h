@@ -31,6 +31,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -119,6 +120,10 @@ class MpfTracker {
     Eigen::Vector3d estimate = Eigen::Vector3d::Zero();  // weighted particle mean
     double estimate_obs = 0;
     Eigen::Vector3d reported = Eigen::Vector3d::Zero();
+    // A hand's end of its bare arm (arm_geodesic.h) and the frame (frames_) it was found in:
+    // the next frame's walk keeps to that end where the other rules cannot tell.
+    Eigen::Vector3d hand_end = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    uint64_t hand_end_frame = 0;  // 0: none (frames_ counts from 1 during an update)
     // Memory of the last track (identity recovery).
     uint32_t last_id = 0;
     double inactive_since = 0;
@@ -168,7 +173,8 @@ class MpfTracker {
   void recordHandSides();
   void renormaliseMixture(const Reclustering& r);
   void updateReportedEstimates();
-  Eigen::Vector3d refineCentroid(int slot) const;
+  // hand_end (may be null): set to the arm's hand end when the arm walk found one.
+  Eigen::Vector3d refineCentroid(int slot, Eigen::Vector3d* hand_end = nullptr) const;
   void publish();
   Eigen::Vector3f clampToWorkspace(const Eigen::Vector3f& x) const;
 
