@@ -125,6 +125,37 @@ TEST(ArmGeodesic, LevelEndsKeepTheLastFramesHandEnd) {
   EXPECT_LT((walk(skin, elbow, &far).hand_end - elbow).norm(), 0.06);
 }
 
+// A sleeve just beyond one end (the foreign-body probe) marks the arm's root: it outranks last
+// frame's end and the head, and yields to the frontal rule.
+TEST(ArmGeodesic, TheSleeveBeyondAnEndMarksTheRoot) {
+  psfs::ProbabilityVolume skin = emptyVolume();
+  const Vector3d elbow(0.30, -0.25, 0.12), wrist(0.08, -0.25, 0.12), tips(-0.11, -0.25, 0.12);
+  fillCapsule(&skin, elbow, wrist, 0.035);
+  fillCapsule(&skin, wrist, tips, 0.025);
+  // The sleeve goes on past the elbow (x > 0.33 m): body that is not skin there.
+  const hand_tracking::ForeignBodyProbe sleeve = [](const Vector3d& p) {
+    return p.x() > 0.33 ? 0.5 : 0.0;
+  };
+  const Vector3d last_at_elbow = elbow + Vector3d(0.01, 0.0, 0.0);
+  const ArmEnd e = armHandEnd(skin, kThreshold, elbow, kStartRadius, {}, ArmWalkParams(), kHead,
+                              sleeve, &last_at_elbow);
+  ASSERT_EQ(e.arm_weight, 1.0);
+  EXPECT_LT((e.hand_end - tips).norm(), 0.05);  // not the elbow the head and last frame name
+  // A sleeve read at the tips' end instead is outranked by the hand in front (the arm turned
+  // to point at the screen: the tips 20 cm further along +y than the elbow).
+  psfs::ProbabilityVolume pointing = emptyVolume();
+  const Vector3d p_elbow(0.30, -0.35, 0.12), p_wrist(0.22, -0.14, 0.12), p_tips(0.16, 0.04, 0.12);
+  fillCapsule(&pointing, p_elbow, p_wrist, 0.035);
+  fillCapsule(&pointing, p_wrist, p_tips, 0.025);
+  const hand_tracking::ForeignBodyProbe at_tips = [](const Vector3d& p) {
+    return p.y() > 0.03 ? 0.5 : 0.0;
+  };
+  const ArmEnd f = armHandEnd(pointing, kThreshold, p_elbow, kStartRadius, {}, ArmWalkParams(),
+                              kHead, at_tips, nullptr);
+  ASSERT_EQ(f.arm_weight, 1.0);
+  EXPECT_LT((f.hand_end - p_tips).norm(), 0.05);
+}
+
 // What is not an arm leaves the caller's centroid alone (arm_weight 0): a hand alone (23 cm
 // with its caps, 21 cm centre to centre: under min_arm_length's 27 cm), skin longer than an arm
 // (a skin-coloured desk), skin thicker than an arm (a skin-coloured shirt), and no skin near
