@@ -96,28 +96,23 @@ size_t farthest(const std::vector<float>& d) {
   return best;
 }
 
-// Weighted mean of the voxels within `upto` of an end.
-Eigen::Vector3d meanNear(const BlobWalk& w, const std::vector<float>& d, double upto) {
+// Weighted mean of the voxels whose distance along the skin lies in [from, to] (NaN: none).
+Eigen::Vector3d meanInBand(const BlobWalk& w, const std::vector<float>& d, double from, double to) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double mass = 0.0;
   for (size_t i = 0; i < d.size(); ++i)
-    if (d[i] <= upto) {
-      const double m = w.weight(i);
-      sum += m * w.centre(i);
-      mass += m;
-    }
+    if (d[i] >= from && d[i] <= to) sum += w.weight(i) * w.centre(i), mass += w.weight(i);
   return mass > 0.0 ? Eigen::Vector3d(sum / mass) : Eigen::Vector3d::Constant(std::nan(""));
+}
+Eigen::Vector3d meanNear(const BlobWalk& w, const std::vector<float>& d, double upto) {
+  return meanInBand(w, d, 0.0, upto);
 }
 // The arm's direction at an end (unit, outwards): from the voxels 6-10 cm in to the end.
 Eigen::Vector3d outwards(const BlobWalk& w, const std::vector<float>& d,
                          const Eigen::Vector3d& end) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  double mass = 0.0;
-  for (size_t i = 0; i < d.size(); ++i)
-    if (d[i] >= kDirectionFrom && d[i] <= kDirectionTo)
-      sum += w.weight(i) * w.centre(i), mass += w.weight(i);
-  if (!(mass > 0.0)) return Eigen::Vector3d::Zero();
-  const Eigen::Vector3d dir = end - sum / mass;
+  const Eigen::Vector3d inside = meanInBand(w, d, kDirectionFrom, kDirectionTo);
+  if (!inside.allFinite()) return Eigen::Vector3d::Zero();
+  const Eigen::Vector3d dir = end - inside;
   return dir.norm() > 1e-9 ? Eigen::Vector3d(dir.normalized()) : Eigen::Vector3d::Zero();
 }
 }  // namespace

@@ -38,6 +38,13 @@ void fillCapsule(psfs::ProbabilityVolume* v, const Vector3d& a, const Vector3d& 
         if (segmentDistance(g.centre(x, y, z), a, b) <= r) v->data[g.index(x, y, z)] = 230;
 }
 
+// A bare forearm (3.5 cm) from the elbow to the wrist and a hand (2.5 cm) on to the tips.
+void fillArm(psfs::ProbabilityVolume* v, const Vector3d& elbow, const Vector3d& wrist,
+             const Vector3d& tips) {
+  fillCapsule(v, elbow, wrist, 0.035);
+  fillCapsule(v, wrist, tips, 0.025);
+}
+
 // The skin centroid of the voxels within the capsule [a, b] of radius r (the hand's truth as the
 // volume holds it).
 Vector3d capsuleCentroid(const psfs::ProbabilityVolume& v, const Vector3d& a, const Vector3d& b,
@@ -67,8 +74,7 @@ ArmEnd walk(const psfs::ProbabilityVolume& skin, const Vector3d& start,
 TEST(ArmGeodesic, FindsTheHandOfAStretchedForearmFromTheElbow) {
   psfs::ProbabilityVolume skin = emptyVolume();
   const Vector3d elbow(-0.33, -0.31, 0.15), wrist(-0.335, -0.09, 0.15), tips(-0.34, 0.10, 0.15);
-  fillCapsule(&skin, elbow, wrist, 0.035);
-  fillCapsule(&skin, wrist, tips, 0.025);
+  fillArm(&skin, elbow, wrist, tips);
   const Vector3d hand = capsuleCentroid(skin, wrist, tips, 0.025);
   const ArmEnd e = walk(skin, elbow);
   std::printf("[ figures  ] stretched arm: length %.3f m, cross-section %.4f m^2, hand %.1f mm "
@@ -91,8 +97,7 @@ TEST(ArmGeodesic, FindsTheHandOfAStretchedForearmFromTheElbow) {
 TEST(ArmGeodesic, ARaisedHandIsTheFrontalEndNotTheEndAwayFromTheHead) {
   psfs::ProbabilityVolume skin = emptyVolume();
   const Vector3d elbow(0.45, -0.47, 0.26), wrist(0.32, -0.31, 0.46), tips(0.24, -0.20, 0.60);
-  fillCapsule(&skin, elbow, wrist, 0.035);
-  fillCapsule(&skin, wrist, tips, 0.025);
+  fillArm(&skin, elbow, wrist, tips);
   ASSERT_LT((tips - kHead).norm(), (elbow - kHead).norm());
   const Vector3d hand = capsuleCentroid(skin, wrist, tips, 0.025);
   const ArmEnd e = walk(skin, elbow);
@@ -111,8 +116,7 @@ TEST(ArmGeodesic, ARaisedHandIsTheFrontalEndNotTheEndAwayFromTheHead) {
 TEST(ArmGeodesic, LevelEndsKeepTheLastFramesHandEnd) {
   psfs::ProbabilityVolume skin = emptyVolume();
   const Vector3d elbow(0.30, -0.25, 0.12), wrist(0.08, -0.25, 0.12), tips(-0.11, -0.25, 0.12);
-  fillCapsule(&skin, elbow, wrist, 0.035);
-  fillCapsule(&skin, wrist, tips, 0.025);
+  fillArm(&skin, elbow, wrist, tips);
   const ArmEnd by_head = walk(skin, elbow);
   ASSERT_EQ(by_head.arm_weight, 1.0);
   // The tips are nearer the head (x = 0) than the elbow: the head's rule takes the elbow.
@@ -130,8 +134,7 @@ TEST(ArmGeodesic, LevelEndsKeepTheLastFramesHandEnd) {
 TEST(ArmGeodesic, TheSleeveBeyondAnEndMarksTheRoot) {
   psfs::ProbabilityVolume skin = emptyVolume();
   const Vector3d elbow(0.30, -0.25, 0.12), wrist(0.08, -0.25, 0.12), tips(-0.11, -0.25, 0.12);
-  fillCapsule(&skin, elbow, wrist, 0.035);
-  fillCapsule(&skin, wrist, tips, 0.025);
+  fillArm(&skin, elbow, wrist, tips);
   // The sleeve goes on past the elbow (x > 0.33 m): body that is not skin there.
   const hand_tracking::ForeignBodyProbe sleeve = [](const Vector3d& p) {
     return p.x() > 0.33 ? 0.5 : 0.0;
@@ -145,8 +148,7 @@ TEST(ArmGeodesic, TheSleeveBeyondAnEndMarksTheRoot) {
   // to point at the screen: the tips 20 cm further along +y than the elbow).
   psfs::ProbabilityVolume pointing = emptyVolume();
   const Vector3d p_elbow(0.30, -0.35, 0.12), p_wrist(0.22, -0.14, 0.12), p_tips(0.16, 0.04, 0.12);
-  fillCapsule(&pointing, p_elbow, p_wrist, 0.035);
-  fillCapsule(&pointing, p_wrist, p_tips, 0.025);
+  fillArm(&pointing, p_elbow, p_wrist, p_tips);
   const hand_tracking::ForeignBodyProbe at_tips = [](const Vector3d& p) {
     return p.y() > 0.03 ? 0.5 : 0.0;
   };
