@@ -25,6 +25,9 @@ class GpuFramePath {
   GpuFramePath(const GaussianMixture2D& skin, const ReconstructorParams& params);
 
   void setPriors(const ClassPriors& priors) { pixels_.setPriors(priors); }
+  void setClothingColour(const ColourGaussian* colour, double weight) {
+    pixels_.setClothingColour(colour, weight);
+  }
   void setFusion(const PsfsOptions& body, const PsfsOptions& skin, const PsfsOptions& hand);
 
   // The host's models changed (learned, relearned, loaded, another rig): upload them before

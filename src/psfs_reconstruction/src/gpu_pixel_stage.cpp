@@ -91,6 +91,9 @@ void GpuPixelStage::setParams(const PixelClassifierParams& params) {
   impl_->classifier.setParams(params);
 }
 void GpuPixelStage::setPriors(const ClassPriors& priors) { impl_->classifier.setPriors(priors); }
+void GpuPixelStage::setClothingColour(const ColourGaussian* colour, double weight) {
+  impl_->classifier.setClothingColour(colour, weight);
+}
 int GpuPixelStage::cameras() const { return int(impl_->sizes.size()); }
 std::size_t GpuPixelStage::deviceAllocations() const {
   return impl_->device ? impl_->device->allocations() : 0;
@@ -149,7 +152,8 @@ std::vector<ClassificationStats> GpuPixelStage::classify(const std::vector<cv::M
     if (!rgb[c].empty()) checkRgb8(rgb[c], m.sizes[c].width, m.sizes[c].height, camName(c));
 
   const PixelClassifierParams& params = m.classifier.params();
-  const pixel::PixelConstants k = pixelConstants(params, m.classifier.priors());
+  const ClassifierKernelConstants kc = kernelConstants(m.classifier);
+  const pixel::PixelConstants& k = kc.k;
   const bool compensate = gainCompensated(params);
   const pixel::GainConstants gc = gainConstants(params);
   m.frame = true;
@@ -166,7 +170,8 @@ std::vector<ClassificationStats> GpuPixelStage::classify(const std::vector<cv::M
     stage(rgb[c], b.host_rgb);
     const BackgroundPlanes planes = readOnly(b.background);
     const pixel::ClassifyArgs args =
-        classifyArgs(k, m.skin_terms, b.rgb, planes, b.likelihood, b.width, b.height,
+        classifyArgs(k, m.skin_terms, kc.clothingTerm(), b.rgb, planes, b.likelihood, b.width,
+                     b.height,
                      compensate ? gainOf(b.gain_peak) : nullptr);
     const pixel::GainArgs gain = gainArgs(gc, b.rgb, planes, b.width, b.height);
     dev.classify(int(c), args, compensate ? &gain : nullptr, likelihoods != nullptr);

@@ -144,9 +144,12 @@ PSFS_HD float skinDensity(const detail::SkinKernelTerm& t, float r, float g) {
 struct LikelihoodBytes {
   std::uint8_t foreground, skin;
 };
-// pf: P'(F|c); ps: p(c|S) (the skin GMM's density); dark: ForegroundTerm::dark.
-PSFS_HD LikelihoodBytes likelihoodBytes(const PixelConstants& k, float pf, float ps, float dark) {
-  const float p_sc = ps / (ps + k.odds_skin);  // = p P(S) / (p P(S) + P(notS))
+// pf: P'(F|c); ps: p(c|S) (the skin GMM's density); pn: the clothing colour's part of
+// p(c|notS), weight q(c), times P(notS) / P(S) (0 without one); dark: ForegroundTerm::dark.
+PSFS_HD LikelihoodBytes likelihoodBytes(const PixelConstants& k, float pf, float ps, float pn,
+                                        float dark) {
+  // = p P(S) / (p P(S) + p(c|notS) P(notS)), p(c|notS) = 1 + weight q(c)
+  const float p_sc = ps / (ps + k.odds_skin + pn);
   const float s = dark * k.dark_skin + (1.0f - dark) * (k.outS + k.keepS * p_sc);
   LikelihoodBytes b;
   b.foreground = std::uint8_t(int(pf * 255.0f + 0.5f));
@@ -160,6 +163,8 @@ struct ClassifyArgs {
   PixelConstants k;  // k.gain is replaced by *gain when gain is set
   detail::SkinKernelTerm skin[kMaxSkinTerms];
   int skin_terms = 0;
+  detail::SkinKernelTerm clothing{};  // the clothing colour in p(c|notS) (clothing_colour.h)
+  int clothing_terms = 0;           // 0 or 1
   const std::uint8_t* rgb = nullptr;  // rgb8, 3 * width bytes per row
   BackgroundPlanes background;
   std::uint8_t* likelihood = nullptr;  // CV_8UC2 layout, 2 * width bytes per row
@@ -187,7 +192,8 @@ PSFS_HD PixelCounts classifyThread(const ClassifyArgs& a, int i) {
                                           P.scale_r[i], P.scale_g[i], P.var_intensity[i]);
   float ps = 0.0f;
   for (int j = 0; j < a.skin_terms; ++j) ps += skinDensity(a.skin[j], c.r, c.g);
-  const LikelihoodBytes b = likelihoodBytes(k, f.p, ps, f.dark);
+  const float pn = a.clothing_terms ? skinDensity(a.clothing, c.r, c.g) : 0.0f;
+  const LikelihoodBytes b = likelihoodBytes(k, f.p, ps, pn, f.dark);
   a.likelihood[2 * std::size_t(i)] = b.foreground;
   a.likelihood[2 * std::size_t(i) + 1] = b.skin;
   PixelCounts n;

@@ -101,20 +101,42 @@ void PixelClassifier::setPriors(const ClassPriors& priors) {
   priors_ = priors;
 }
 
+namespace {
+
+detail::SkinKernelTerm gaussianTerm(const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance,
+                                    double weight) {
+  const Eigen::Matrix2d half_inv = 0.5 * covariance.inverse();
+  detail::SkinKernelTerm t;
+  t.mean_r = float(mean.x());
+  t.mean_g = float(mean.y());
+  t.a = float(half_inv(0, 0));
+  t.b2 = float(2.0 * half_inv(0, 1));
+  t.c = float(half_inv(1, 1));
+  t.weight = float(weight / (2.0 * kPi * std::sqrt(covariance.determinant())));
+  return t;
+}
+
+bool positiveDefinite(const Eigen::Matrix2d& c) {
+  return c.allFinite() && c(0, 0) > 0.0 && c.determinant() > 0.0 &&
+         std::abs(c(0, 1) - c(1, 0)) <= 1e-12 * (1.0 + std::abs(c(0, 1)));
+}
+
+}  // namespace
+
 std::vector<detail::SkinKernelTerm> skinKernelTerms(const GaussianMixture2D& skin) {
   std::vector<detail::SkinKernelTerm> terms;
-  for (const auto& c : skin.components()) {
-    const Eigen::Matrix2d half_inv = 0.5 * c.covariance.inverse();
-    detail::SkinKernelTerm t;
-    t.mean_r = float(c.mean.x());
-    t.mean_g = float(c.mean.y());
-    t.a = float(half_inv(0, 0));
-    t.b2 = float(2.0 * half_inv(0, 1));
-    t.c = float(half_inv(1, 1));
-    t.weight = float(c.weight / (2.0 * kPi * std::sqrt(c.covariance.determinant())));
-    terms.push_back(t);
-  }
+  for (const auto& c : skin.components())
+    terms.push_back(gaussianTerm(c.mean, c.covariance, c.weight));
   return terms;
+}
+
+detail::SkinKernelTerm clothingKernelTerm(const ColourGaussian& colour, double weight,
+                                          const ClassPriors& priors) {
+  if (!positiveDefinite(colour.covariance) || !colour.mean.allFinite())
+    throw std::invalid_argument("pixel classifier: the clothing colour's covariance must be "
+                                "positive definite and its mean finite");
+  const double pS = clampPrior(priors.skin);
+  return gaussianTerm(colour.mean, colour.covariance, weight * (1.0 - pS) / pS);
 }
 
 pixel::PixelConstants pixelConstants(const PixelClassifierParams& params,
@@ -147,6 +169,17 @@ pixel::PixelConstants pixelConstants(const PixelClassifierParams& params,
   return k;
 }
 
+ClassifierKernelConstants kernelConstants(const PixelClassifier& classifier) {
+  ClassifierKernelConstants c;
+  const ColourGaussian* clothing = classifier.clothingColour();
+  c.k = pixelConstants(classifier.params(), classifier.priors());
+  if (clothing) {
+    c.has_clothing = true;
+    c.clothing = clothingKernelTerm(*clothing, classifier.clothingWeight(), classifier.priors());
+  }
+  return c;
+}
+
 bool gainCompensated(const PixelClassifierParams& params) {
   return params.intensity_model && params.gain_compensation;
 }
@@ -163,14 +196,29 @@ pixel::GainConstants gainConstants(const PixelClassifierParams& params) {
 
 void PixelClassifier::rebuild() { skin_terms_ = skinKernelTerms(skin_); }
 
+void PixelClassifier::setClothingColour(const ColourGaussian* colour, double weight) {
+  if (!(weight >= 0.0 && std::isfinite(weight)))
+    throw std::invalid_argument(
+        "pixel classifier: the clothing colour's weight must be finite and >= 0");
+  if (!colour || weight == 0.0) {
+    has_clothing_ = false;
+    clothing_weight_ = 0.0;
+    return;
+  }
+  clothingKernelTerm(*colour, weight, priors_);  // validates
+  has_clothing_ = true;
+  clothing_ = *colour;
+  clothing_weight_ = weight;
+}
+
 // ---- fast path ------------------------------------------------------------------------------
 
 namespace {
 
-// Scratch for one row: 7 float rows (9 KB at 320 px: stays in L1).
+// Scratch for one row: 8 float rows (10 KB at 320 px: stays in L1).
 struct RowScratch {
   std::vector<float> f;
-  explicit RowScratch(int w) : f(std::size_t(w) * 7) {}
+  explicit RowScratch(int w) : f(std::size_t(w) * 8) {}
 };
 
 // The row loops. Each is straight-line float code over contiguous arrays (selects, no
@@ -205,10 +253,11 @@ PSFS_ALWAYS_INLINE void skinComponentRow(const detail::SkinKernelTerm& t, int w,
 // P'(S|c), the product, and quantisation to the two interleaved output channels.
 PSFS_ALWAYS_INLINE void outputRow(const pixel::PixelConstants& constants, int w,
                                   const float* __restrict pf, const float* __restrict ps,
-                                  const float* __restrict dark, std::uint8_t* __restrict dst) {
+                                  const float* __restrict pn, const float* __restrict dark,
+                                  std::uint8_t* __restrict dst) {
   const pixel::PixelConstants k = constants;
   for (int x = 0; x < w; ++x) {
-    const pixel::LikelihoodBytes b = pixel::likelihoodBytes(k, pf[x], ps[x], dark[x]);
+    const pixel::LikelihoodBytes b = pixel::likelihoodBytes(k, pf[x], ps[x], pn[x], dark[x]);
     dst[2 * x + 0] = b.foreground;
     dst[2 * x + 1] = b.skin;
   }
@@ -239,7 +288,8 @@ PSFS_ALWAYS_INLINE RowStats rowStats(int w, const float* __restrict dark,
 // The unit of work of the OpenMP loop, compiled per instruction set (PSFS_TARGET_CLONES).
 PSFS_TARGET_CLONES
 RowStats classifyRow(const pixel::PixelConstants& k, const detail::SkinKernelTerm* terms, int K,
-                     const std::uint8_t* src, int w, const BackgroundPlanes& P, std::size_t o,
+                     const detail::SkinKernelTerm* clothing, const std::uint8_t* src, int w,
+                     const BackgroundPlanes& P, std::size_t o,
                      RowScratch& scratch, std::uint8_t* dst) {
   float* r = scratch.f.data();
   float* g = r + w;
@@ -248,12 +298,15 @@ RowStats classifyRow(const pixel::PixelConstants& k, const detail::SkinKernelTer
   float* ps = pf + w;
   float* dark = ps + w;
   float* shadow = dark + w;
+  float* pn = shadow + w;
   kernels::rgbRowToRgI(src, w, r, g, in);
   foregroundRow(k, w, r, g, in, P.mean_r + o, P.mean_g + o, P.mean_intensity + o, P.scale_r + o,
                 P.scale_g + o, P.var_intensity + o, pf, dark, shadow);
   std::fill(ps, ps + w, 0.0f);
   for (int j = 0; j < K; ++j) skinComponentRow(terms[j], w, r, g, ps);
-  outputRow(k, w, pf, ps, dark, dst);
+  std::fill(pn, pn + w, 0.0f);
+  if (clothing) skinComponentRow(*clothing, w, r, g, pn);
+  outputRow(k, w, pf, ps, pn, dark, dst);
   return rowStats(w, dark, shadow, src, dst);
 }
 
@@ -271,7 +324,9 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
   const int total_rows = row_start[cameras];
   std::vector<RowStats> row_stats(total_rows);
 
-  const pixel::PixelConstants k = pixelConstants(params_, priors_);
+  const ClassifierKernelConstants kc = kernelConstants(*this);
+  const pixel::PixelConstants& k = kc.k;
+  const detail::SkinKernelTerm* clothing = kc.clothingTerm();
   // Per camera: its gain this frame.
   std::vector<pixel::PixelConstants> ks(cameras, k);
   std::vector<double> gains(cameras, 1.0);
@@ -299,8 +354,9 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
       const int y = row - row_start[cam];
       const int w = rgb[cam].cols;
       row_stats[row] =
-          classifyRow(ks[cam], terms, K, rgb[cam].ptr<std::uint8_t>(y), w, bg[cam]->planes(),
-                      std::size_t(y) * std::size_t(w), scratch, out[cam].ptr<std::uint8_t>(y));
+          classifyRow(ks[cam], terms, K, clothing, rgb[cam].ptr<std::uint8_t>(y), w,
+                      bg[cam]->planes(), std::size_t(y) * std::size_t(w), scratch,
+                      out[cam].ptr<std::uint8_t>(y));
     }
   }
 
@@ -440,7 +496,15 @@ void PixelClassifier::classifyPixel(std::uint8_t R, std::uint8_t G, std::uint8_t
       if (inside) p_fc = 0.0;
     }
     const double p_skin = skin_.density(c.r, c.g);
-    const double p_sc = p_skin * pS / (p_skin * pS + (1.0 - pS));
+    // p(c|notS) = 1 + weight q(c), q the clothing colour's Gaussian
+    double p_notskin = 1.0;
+    if (has_clothing_) {
+      const Eigen::Vector2d d = Eigen::Vector2d(c.r, c.g) - clothing_.mean;
+      const double q = std::exp(-0.5 * d.dot(clothing_.covariance.inverse() * d)) /
+                       (2.0 * kPi * std::sqrt(clothing_.covariance.determinant()));
+      p_notskin = 1.0 + clothing_weight_ * q;
+    }
+    const double p_sc = p_skin * pS / (p_skin * pS + (1.0 - pS) * p_notskin);
     f = eF * PF + (1.0 - eF) * p_fc;
     s = eS * PS + (1.0 - eS) * p_sc;
   }

@@ -72,9 +72,10 @@ ClassificationStats classify(const PixelClassifier& classifier, const cv::Mat& r
   const bool compensate = gainCompensated(params);
   if (compensate)
     peak = gain(gainArgs(gainConstants(params), image.data, planes, rgb.cols, rgb.rows));
+  const ClassifierKernelConstants kc = kernelConstants(classifier);
   const pixel::ClassifyArgs args =
-      classifyArgs(pixelConstants(params, classifier.priors()),
-                   skinKernelTerms(classifier.skinModel()), image.data, planes, likelihood.data,
+      classifyArgs(kc.k, skinKernelTerms(classifier.skinModel()), kc.clothingTerm(), image.data,
+                   planes, likelihood.data,
                    rgb.cols, rgb.rows, compensate ? &peak.gain : nullptr);
   const pixel::ClassifyTotals totals = classify(args);
   return classificationStats(totals, rgb.rows * rgb.cols, compensate ? &peak : nullptr);

@@ -9,6 +9,7 @@ namespace psfs {
 
 pixel::ClassifyArgs classifyArgs(const pixel::PixelConstants& constants,
                                  const std::vector<detail::SkinKernelTerm>& skin,
+                                 const detail::SkinKernelTerm* clothing,
                                  const std::uint8_t* rgb, const BackgroundPlanes& background,
                                  std::uint8_t* likelihood, int width, int height,
                                  const float* gain) {
@@ -20,6 +21,10 @@ pixel::ClassifyArgs classifyArgs(const pixel::PixelConstants& constants,
   a.k = constants;
   for (std::size_t j = 0; j < skin.size(); ++j) a.skin[j] = skin[j];
   a.skin_terms = int(skin.size());
+  if (clothing) {
+    a.clothing = *clothing;
+    a.clothing_terms = 1;
+  }
   a.rgb = rgb;
   a.background = background;
   a.likelihood = likelihood;

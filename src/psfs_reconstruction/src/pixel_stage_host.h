@@ -22,15 +22,32 @@ namespace psfs {
 std::vector<detail::SkinKernelTerm> skinKernelTerms(const GaussianMixture2D& skin);
 // Per-frame classification constants; gain = 1 (each camera sets its own).
 pixel::PixelConstants pixelConstants(const PixelClassifierParams& params, const ClassPriors& priors);
+// The clothing colour's term of p(c|notS), pre-multiplied by weight P(notS) / P(S) for
+// likelihoodBytes (pixel_arithmetic.h). Throws std::invalid_argument for a covariance that is not
+// positive definite.
+detail::SkinKernelTerm clothingKernelTerm(const ColourGaussian& colour, double weight,
+                                          const ClassPriors& priors);
 // Whether the classifier divides out a global gain per frame, and the gain histogram's constants
 // (PixelClassifier::estimateGain).
 bool gainCompensated(const PixelClassifierParams& params);
 pixel::GainConstants gainConstants(const PixelClassifierParams& params);
 
+// A classifier's constants and clothing term as its kernels take them (the CPU rows, the GPU
+// stage and its emulation): one place for the clothing colour's term.
+struct ClassifierKernelConstants {
+  pixel::PixelConstants k;
+  bool has_clothing = false;
+  detail::SkinKernelTerm clothing{};
+  const detail::SkinKernelTerm* clothingTerm() const { return has_clothing ? &clothing : nullptr; }
+};
+ClassifierKernelConstants kernelConstants(const PixelClassifier& classifier);
+
 // ---- argument blocks (pixel_stage_host.cpp) ----
 // Throws std::invalid_argument for more than pixel::kMaxSkinTerms skin components.
+// clothing: the clothing colour's term, or nullptr.
 pixel::ClassifyArgs classifyArgs(const pixel::PixelConstants& constants,
                                  const std::vector<detail::SkinKernelTerm>& skin,
+                                 const detail::SkinKernelTerm* clothing,
                                  const std::uint8_t* rgb, const BackgroundPlanes& background,
                                  std::uint8_t* likelihood, int width, int height,
                                  const float* gain);

@@ -65,11 +65,13 @@ void ReconstructorParams::validate() const {
     if (f->levels < 2 || f->levels > ProjectionTable::kMaxFootprintLevels)
       fail("footprint levels must lie in [2, 3]");
   if (!(footprint_scale > 0 && std::isfinite(footprint_scale))) fail("footprint_scale must be > 0");
+  clothing.validate();
 }
 
 Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const ReconstructorParams& params)
     : params_((params.validate(), params)),
       classifier_(skin_model, params.classifier),
+      clothing_(params.clothing),
       body_fusion_(params.body),
       skin_fusion_(params.skin),
       hand_fusion_(params.hand) {
@@ -141,6 +143,23 @@ void Reconstructor::resetBackground() {
   if (backgroundReady()) previous_backgrounds_ = backgrounds_;
   for (auto& b : backgrounds_) b = BackgroundModel(b.width(), b.height(), params_.background);
   learning_skips_ = 0;
+  clothing_.reset();  // perhaps another person, or another light
+  setClothingColour(nullptr);
+}
+
+void Reconstructor::setClothingColour(const ColourGaussian* colour) {
+  classifier_.setClothingColour(colour, params_.clothing.weight);
+  if (gpu_) gpu_->setClothingColour(colour, params_.clothing.weight);
+}
+
+void Reconstructor::learnClothingColour(const std::vector<cv::Mat>& rgb,
+                                        const std::vector<Eigen::Vector3d>& hands, FrameResult* r) {
+  if (!params_.clothing.enabled || params_.clothing.weight == 0.0) return;
+  r->trunk_colour = measureTrunkColour(r->body, thresholdByte(params_.body.threshold), rgb,
+                                       cameras_, r->camera_active, hands,
+                                       params_.classifier.min_chroma_intensity, params_.clothing);
+  clothing_.update(r->trunk_colour);
+  if (clothing_.valid()) setClothingColour(&clothing_.colour());
 }
 
 void Reconstructor::validateFrame(const std::vector<cv::Mat>& rgb,
@@ -185,6 +204,8 @@ void Reconstructor::adoptRig(const std::vector<tabletop_capture::CameraModel>& c
                           " frame sets");
     backgrounds_.clear();
     previous_backgrounds_.clear();
+    clothing_.reset();  // seen through other cameras' white balance
+    setClothingColour(nullptr);
     for (const auto& c : cameras)
       backgrounds_.emplace_back(c.width, c.height, params_.background);
     // A model loaded from files is used if it was saved for exactly these cameras.
@@ -452,6 +473,10 @@ FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
   } else {
     reconstruct(rgb, hand_rois, foreground_masks, false, &r);
   }
+  // After the set, once (a GPU failure above reran it on the CPU with the same colour).
+  const auto t_clothing = Clock::now();
+  learnClothingColour(rgb, hand_rois, &r);
+  r.times.clothing = msSince(t_clothing);
   r.backend = active_backend_;
   r.times.total = msSince(t_start);
   return r;

@@ -46,6 +46,17 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
       .add("background_model/learning_max_occupied_litres", &p.learning_max_occupied_litres)
       .add("background_model/update", &p.update_background)
       .add("background_model/mask_margin_px", &p.mask_margin_px);
+  s->add("clothing_colour/enabled", &p.clothing.enabled)
+      .add("clothing_colour/weight", &p.clothing.weight)
+      .add("clothing_colour/band_top", &p.clothing.band_top)
+      .add("clothing_colour/band_bottom", &p.clothing.band_bottom)
+      .add("clothing_colour/core_radius", &p.clothing.core_radius)
+      .add("clothing_colour/hand_exclusion_radius", &p.clothing.hand_exclusion_radius)
+      .add("clothing_colour/trim_radius", &p.clothing.trim_radius)
+      .add("clothing_colour/min_inlier_fraction", &p.clothing.min_inlier_fraction)
+      .add("clothing_colour/min_samples", &p.clothing.min_samples)
+      .add("clothing_colour/min_sd", &p.clothing.min_sd)
+      .add("clothing_colour/update_rate", &p.clothing.update_rate);
   s->add("volume/workspace_min", &p.workspace.min_corner)
       .add("volume/workspace_size", &p.workspace.size)
       .add("volume/dims", &p.dims)

@@ -159,26 +159,38 @@ TEST(PixelArithmetic, ColourConversionIsColorSpaceForEveryColour) {
 TEST(PixelStageEmulation, ClassificationIsTheClassifiersBytesOnTheRig) {
   const Rig& r = rig();
   int gains_not_one = 0, dark = 0, saturated = 0, shadow = 0;
+  // With and without a clothing colour in p(c|notS) (a skin-like tan, clothing_colour.h).
+  ColourGaussian tan;
+  tan.mean = Eigen::Vector2d(0.46, 0.32);
+  tan.covariance << 1.2e-4, 1e-5, 1e-5, 9e-5;
+  int clothing_changed = 0;  // skin bytes the clothing colour changed (it must be exercised)
   for (const PixelClassifierParams& params : paramVariants()) {
-    const PixelClassifier cls(r.skin, params, r.priors);
-    for (size_t f = 0; f < r.frames.size(); ++f) {
-      for (const std::vector<cv::Mat>& images : {r.frames[f], withEdgeCases(r.frames[f])}) {
-        std::vector<cv::Mat> cpu;
-        const auto cpu_stats = cls.classify(images, r.modelPointers(r.models), cpu, 2);
-        for (int c = 0; c < r.cameras(); ++c) {
-          cv::Mat emu;
-          const ClassificationStats s = emulation::classify(cls, images[c], r.models[c], emu);
-          const std::string what = "frame " + std::to_string(f) + " cam " + std::to_string(c);
-          EXPECT_TRUE(sameBytes(emu, cpu[c])) << what << ": " << cv::norm(emu, cpu[c], cv::NORM_INF);
-          expectSameStats(s, cpu_stats[c], what);
-          gains_not_one += s.gain != 1.0;
-          dark += s.dark_pixels;
-          saturated += s.saturated_pixels;
-          shadow += s.shadow_pixels;
+    for (const bool clothing : {false, true}) {
+      PixelClassifier cls(r.skin, params, r.priors);
+      if (clothing) cls.setClothingColour(&tan, 0.5);
+      const PixelClassifier plain(r.skin, params, r.priors);
+      for (size_t f = 0; f < r.frames.size(); ++f) {
+        for (const std::vector<cv::Mat>& images : {r.frames[f], withEdgeCases(r.frames[f])}) {
+          std::vector<cv::Mat> cpu, without;
+          const auto cpu_stats = cls.classify(images, r.modelPointers(r.models), cpu, 2);
+          if (clothing) plain.classify(images, r.modelPointers(r.models), without, 2);
+          for (int c = 0; c < r.cameras(); ++c) {
+            cv::Mat emu;
+            const ClassificationStats s = emulation::classify(cls, images[c], r.models[c], emu);
+            const std::string what = "frame " + std::to_string(f) + " cam " + std::to_string(c);
+            EXPECT_TRUE(sameBytes(emu, cpu[c])) << what << ": " << cv::norm(emu, cpu[c], cv::NORM_INF);
+            expectSameStats(s, cpu_stats[c], what);
+            if (clothing) clothing_changed += cv::norm(cpu[c], without[c], cv::NORM_L1) > 0;
+            gains_not_one += s.gain != 1.0;
+            dark += s.dark_pixels;
+            saturated += s.saturated_pixels;
+            shadow += s.shadow_pixels;
+          }
         }
       }
     }
   }
+  EXPECT_GT(clothing_changed, 0) << "the clothing colour changed no pixel of the rig's frames";
   std::printf("[ figures  ] over all frames: %d gains != 1, %d dark, %d saturated, %d shadow px\n",
               gains_not_one, dark, saturated, shadow);
   // The cases were exercised, not just present.
@@ -314,12 +326,19 @@ TEST(GpuPixelStage, TenFramesAreTheCpuPathsBytes) {
       p.learning_rate = 0.1f;
       m.setParams(p);
     }
-  const PixelClassifier cls(r.skin, {}, r.priors);
+  PixelClassifier cls(r.skin, {}, r.priors);
   GpuPixelStage stage(r.skin, {}, r.priors);
   ASSERT_TRUE(stage.usable()) << stage.reason();
   stage.uploadBackgrounds(r.modelPointers(gpu_models));
   size_t allocations_after_first = 0;
+  ColourGaussian tan;  // a clothing colour in p(c|notS) from step 5 on (clothing_colour.h)
+  tan.mean = Eigen::Vector2d(0.46, 0.32);
+  tan.covariance << 1.2e-4, 1e-5, 1e-5, 9e-5;
   for (int step = 0; step < 10; ++step) {
+    if (step == 5) {
+      cls.setClothingColour(&tan, 0.5);
+      stage.setClothingColour(&tan, 0.5);
+    }
     const size_t f = size_t(step) % r.frames.size();
     const std::vector<cv::Mat> images = step % 2 ? withEdgeCases(r.frames[f]) : r.frames[f];
     const std::string what = "step " + std::to_string(step);

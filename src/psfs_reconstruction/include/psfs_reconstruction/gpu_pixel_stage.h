@@ -53,6 +53,8 @@ class GpuPixelStage {
   const PixelClassifier& classifier() const;
   void setParams(const PixelClassifierParams& params);  // validates; applies from the next frame
   void setPriors(const ClassPriors& priors);
+  // PixelClassifier::setClothingColour, from the next frame.
+  void setClothingColour(const ColourGaussian* colour, double weight);
 
   // --- background models ---
   // Copies the models (one per camera, ready, in the cameras' order) to the device, with their

@@ -35,6 +35,7 @@
 #include <opencv2/core.hpp>
 
 #include "psfs_reconstruction/background_model.h"
+#include "psfs_reconstruction/colour_gaussian.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
 #include "psfs_reconstruction/skin_kernel_term.h"
 
@@ -123,6 +124,14 @@ class PixelClassifier {
 
   void setParams(const PixelClassifierParams& params);  // validates; throws invalid_argument
   void setPriors(const ClassPriors& priors);            // validates; throws invalid_argument
+  // The person's clothing colour in p(c|notS) = 1 + weight q(c), q its Gaussian
+  // (clothing_colour.h); nullptr (the default) or weight 0: the thesis' uniform p(c|notS) = 1.
+  // Throws std::invalid_argument for a negative or non-finite weight, or a covariance that is
+  // not positive definite.
+  void setClothingColour(const ColourGaussian* colour, double weight);
+  // The clothing colour in use, or nullptr; its weight.
+  const ColourGaussian* clothingColour() const { return has_clothing_ ? &clothing_ : nullptr; }
+  double clothingWeight() const { return has_clothing_ ? clothing_weight_ : 0.0; }
   const PixelClassifierParams& params() const { return params_; }
   const ClassPriors& priors() const { return priors_; }
   const GaussianMixture2D& skinModel() const { return skin_; }
@@ -173,6 +182,9 @@ class PixelClassifier {
   PixelClassifierParams params_;
   ClassPriors priors_;
   std::vector<detail::SkinKernelTerm> skin_terms_;
+  bool has_clothing_ = false;
+  ColourGaussian clothing_;
+  double clothing_weight_ = 0.0;
 };
 
 }  // namespace psfs

@@ -28,6 +28,7 @@
 #include <opencv2/core.hpp>
 
 #include "psfs_reconstruction/background_model.h"
+#include "psfs_reconstruction/clothing_colour.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
 #include "psfs_reconstruction/pixel_classifier.h"
 #include "psfs_reconstruction/probability_volume.h"
@@ -42,6 +43,9 @@ namespace psfs {
 struct ReconstructorParams {
   PixelClassifierParams classifier;
   BackgroundModelParams background;
+  // The person's clothing colour, learned from the trunk of each set's body volume, in the skin
+  // classifier's p(c|notS) from the next set on (clothing_colour.h).
+  ClothingColourParams clothing;
   // Volume of the body and skin volumes (DESIGN.md section 3 user space) and its resolution.
   // 64x64x48 (15.6 mm) is the tracking resolution of the thesis; a voxel that large spans
   // several pixels, so its evidence must cover its footprint: the body/skin options use the
@@ -119,6 +123,7 @@ struct ReconstructorParams {
 
 struct StageTimes {  // wall time per stage of the last frame (ms)
   double classify = 0, evidence = 0, body = 0, skin = 0, hands = 0, background = 0, total = 0;
+  double clothing = 0;  // measuring the clothing colour (clothing_colour.h)
 };
 
 struct FrameResult {
@@ -134,6 +139,9 @@ struct FrameResult {
   ProbabilityVolume body, skin;
   std::vector<ProbabilityVolume> hands;  // one per requested ROI, same order
   std::vector<ClassificationStats> stats;
+  // The trunk's colour measured in this set (clothing_colour.h; valid false when off or not
+  // found); the classifier uses the running estimate from the next set on.
+  TrunkColourSample trunk_colour;
   std::vector<bool> camera_active;  // false = switched off this frame (dark, or no image)
   StageTimes times;
   // Things the caller should report (throttled): dark or overexposed cameras, rig changes.
@@ -151,6 +159,8 @@ class Reconstructor {
   ~Reconstructor();
 
   const ReconstructorParams& params() const { return params_; }
+  // The clothing colour the next set's classification uses (valid() false: none yet).
+  const ClothingColourModel& clothingColour() const { return clothing_; }
 
   // One frame set: rgb8 images in the cameras' order (an empty Mat: that camera is missing). hand_rois: centres (world, m) of the hand
   // sub-volumes wanted this frame. foreground_masks: optional CV_8UC1 per camera (nonzero =
@@ -216,9 +226,14 @@ class Reconstructor {
   // gives them, reported in `warnings`.
   void dropGpu(const std::string& what, std::vector<std::string>* warnings);
   double occupiedLitresAgainstPrevious(const std::vector<cv::Mat>& rgb);
+  // The clothing colour from this set's body volume, for the next set's classification.
+  void learnClothingColour(const std::vector<cv::Mat>& rgb,
+                           const std::vector<Eigen::Vector3d>& hands, FrameResult* r);
+  void setClothingColour(const ColourGaussian* colour);
 
   ReconstructorParams params_;
   PixelClassifier classifier_;
+  ClothingColourModel clothing_;
   PsfsFusion body_fusion_, skin_fusion_, hand_fusion_;
   std::vector<tabletop_capture::CameraModel> cameras_;
   std::vector<BackgroundModel> backgrounds_;

@@ -35,6 +35,8 @@
 #include <atomic>
 #include <cctype>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <condition_variable>
 #include <deque>
 #include <map>
@@ -496,6 +498,9 @@ class PsfsNodelet : public nodelet::Nodelet {
     }
     cameras_off_ = 0;
     for (bool a : r.camera_active) cameras_off_ += !a;
+    trunk_colour_ = describeTrunkColour(r.trunk_colour);
+    clothing_in_use_ = describeClothing(recon_->clothingColour());
+    clothing_ms_.add(r.times.clothing);
     // Closed loop: the next set waits for the tracker's answer to this one. Noted before the
     // volumes go out, so an ack can never come before the gate expects it.
     if (cfg_.nodelet.wait_for_tracker && roi_sub_.getNumPublishers() > 0 &&
@@ -660,6 +665,33 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("total (ms)", total_ms_.mean());
     stat.add("total max (ms)", total_ms_.max());
     stat.add("volume", workspaceGrid(cfg_.params.workspace, cfg_.params.dims).describe());
+    stat.add("clothing colour (in use)", clothing_in_use_);
+    stat.add("clothing colour (last set)", trunk_colour_);
+    stat.add("clothing colour (ms)", clothing_ms_.mean());
+  }
+
+  std::string describeClothing(const ClothingColourModel& m) const {
+    if (!cfg_.params.clothing.enabled || cfg_.params.clothing.weight == 0.0) return "off";
+    if (!m.valid()) return "none yet";
+    char b[96];
+    std::snprintf(b, sizeof(b), "rg (%.3f, %.3f), sd (%.3f, %.3f)", m.colour().mean.x(),
+                  m.colour().mean.y(), std::sqrt(m.colour().covariance(0, 0)),
+                  std::sqrt(m.colour().covariance(1, 1)));
+    return b;
+  }
+
+  // The clothing colour's measurement for the diagnostics (clothing_colour.h).
+  std::string describeTrunkColour(const TrunkColourSample& t) const {
+    if (!cfg_.params.clothing.enabled || cfg_.params.clothing.weight == 0.0) return "off";
+    char b[160];
+    if (t.valid)
+      std::snprintf(b, sizeof(b), "rg (%.3f, %.3f), sd (%.3f, %.3f), %d samples, %.0f %% inliers",
+                    t.colour.mean.x(), t.colour.mean.y(), std::sqrt(t.colour.covariance(0, 0)),
+                    std::sqrt(t.colour.covariance(1, 1)), t.samples, 100.0 * t.inlier_fraction);
+    else
+      std::snprintf(b, sizeof(b), "not measured: %d trunk voxels, %d samples, %.0f %% inliers",
+                    t.band_voxels, t.samples, 100.0 * t.inlier_fraction);
+    return b;
   }
 
   static constexpr size_t kShedWindow = 50;  // recent sets the shedding decision looks at
@@ -702,6 +734,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::mutex stats_mutex_;
   bool load_tried_ = false, announced_ready_ = false, learning_ = true;
   int learned_ = 0, cameras_off_ = 0;
+  std::string trunk_colour_ = "no set yet", clothing_in_use_ = "none yet";
   uint64_t processed_ = 0, reconstructed_ = 0, rejected_ = 0, warnings_ = 0;
   tabletop_common::RateMeter rate_;
   tabletop_common::GrowthMeter rejections_, warnings_growth_, drops_growth_;
@@ -709,6 +742,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::map<std::string, ros::WallTime> warned_;
   // Per-stage times over the whole run (the demo's summary reads the means).
   RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
+  RunningStats clothing_ms_;
 };
 
 }  // namespace psfs
