@@ -116,11 +116,6 @@ detail::SkinKernelTerm gaussianTerm(const Eigen::Vector2d& mean, const Eigen::Ma
   return t;
 }
 
-bool positiveDefinite(const Eigen::Matrix2d& c) {
-  return c.allFinite() && c(0, 0) > 0.0 && c.determinant() > 0.0 &&
-         std::abs(c(0, 1) - c(1, 0)) <= 1e-12 * (1.0 + std::abs(c(0, 1)));
-}
-
 }  // namespace
 
 std::vector<detail::SkinKernelTerm> skinKernelTerms(const GaussianMixture2D& skin) {
@@ -130,11 +125,8 @@ std::vector<detail::SkinKernelTerm> skinKernelTerms(const GaussianMixture2D& ski
   return terms;
 }
 
-detail::SkinKernelTerm clothingKernelTerm(const ColourGaussian& colour, double weight,
+detail::SkinKernelTerm clothingKernelTerm(const GaussianComponent2D& colour, double weight,
                                           const ClassPriors& priors) {
-  if (!positiveDefinite(colour.covariance) || !colour.mean.allFinite())
-    throw std::invalid_argument("pixel classifier: the clothing colour's covariance must be "
-                                "positive definite and its mean finite");
   const double pS = clampPrior(priors.skin);
   return gaussianTerm(colour.mean, colour.covariance, weight * (1.0 - pS) / pS);
 }
@@ -171,11 +163,12 @@ pixel::PixelConstants pixelConstants(const PixelClassifierParams& params,
 
 ClassifierKernelConstants kernelConstants(const PixelClassifier& classifier) {
   ClassifierKernelConstants c;
-  const ColourGaussian* clothing = classifier.clothingColour();
+  const GaussianMixture2D* clothing = classifier.clothingModel();
   c.k = pixelConstants(classifier.params(), classifier.priors());
   if (clothing) {
     c.has_clothing = true;
-    c.clothing = clothingKernelTerm(*clothing, classifier.clothingWeight(), classifier.priors());
+    c.clothing = clothingKernelTerm(clothing->components()[0], classifier.clothingWeight(),
+                                    classifier.priors());
   }
   return c;
 }
@@ -201,13 +194,19 @@ void PixelClassifier::setClothingColour(const ColourGaussian* colour, double wei
     throw std::invalid_argument(
         "pixel classifier: the clothing colour's weight must be finite and >= 0");
   if (!colour || weight == 0.0) {
-    has_clothing_ = false;
+    clothing_ = GaussianMixture2D();
     clothing_weight_ = 0.0;
     return;
   }
-  clothingKernelTerm(*colour, weight, priors_);  // validates
-  has_clothing_ = true;
-  clothing_ = *colour;
+  GaussianComponent2D c;
+  c.weight = 1.0;
+  c.mean = colour->mean;
+  c.covariance = colour->covariance;
+  try {
+    clothing_ = GaussianMixture2D({c});
+  } catch (const ModelError& e) {
+    throw std::invalid_argument(std::string("pixel classifier: the clothing colour: ") + e.what());
+  }
   clothing_weight_ = weight;
 }
 
@@ -497,13 +496,8 @@ void PixelClassifier::classifyPixel(std::uint8_t R, std::uint8_t G, std::uint8_t
     }
     const double p_skin = skin_.density(c.r, c.g);
     // p(c|notS) = 1 + weight q(c), q the clothing colour's Gaussian
-    double p_notskin = 1.0;
-    if (has_clothing_) {
-      const Eigen::Vector2d d = Eigen::Vector2d(c.r, c.g) - clothing_.mean;
-      const double q = std::exp(-0.5 * d.dot(clothing_.covariance.inverse() * d)) /
-                       (2.0 * kPi * std::sqrt(clothing_.covariance.determinant()));
-      p_notskin = 1.0 + clothing_weight_ * q;
-    }
+    const double p_notskin =
+        clothing_.empty() ? 1.0 : 1.0 + clothing_weight_ * clothing_.density(c.r, c.g);
     const double p_sc = p_skin * pS / (p_skin * pS + (1.0 - pS) * p_notskin);
     f = eF * PF + (1.0 - eF) * p_fc;
     s = eS * PS + (1.0 - eS) * p_sc;

@@ -23,9 +23,8 @@ std::vector<detail::SkinKernelTerm> skinKernelTerms(const GaussianMixture2D& ski
 // Per-frame classification constants; gain = 1 (each camera sets its own).
 pixel::PixelConstants pixelConstants(const PixelClassifierParams& params, const ClassPriors& priors);
 // The clothing colour's term of p(c|notS), pre-multiplied by weight P(notS) / P(S) for
-// likelihoodBytes (pixel_arithmetic.h). Throws std::invalid_argument for a covariance that is not
-// positive definite.
-detail::SkinKernelTerm clothingKernelTerm(const ColourGaussian& colour, double weight,
+// likelihoodBytes (pixel_arithmetic.h).
+detail::SkinKernelTerm clothingKernelTerm(const GaussianComponent2D& colour, double weight,
                                           const ClassPriors& priors);
 // Whether the classifier divides out a global gain per frame, and the gain histogram's constants
 // (PixelClassifier::estimateGain).

@@ -154,7 +154,7 @@ void Reconstructor::setClothingColour(const ColourGaussian* colour) {
 
 void Reconstructor::learnClothingColour(const std::vector<cv::Mat>& rgb,
                                         const std::vector<Eigen::Vector3d>& hands, FrameResult* r) {
-  if (!params_.clothing.enabled || params_.clothing.weight == 0.0) return;
+  if (!params_.clothing.active()) return;
   r->trunk_colour = measureTrunkColour(r->body, thresholdByte(params_.body.threshold), rgb,
                                        cameras_, r->camera_active, hands,
                                        params_.classifier.min_chroma_intensity, params_.clothing);

@@ -58,6 +58,7 @@ struct ClothingColourParams {
   double update_rate = 0.2;
   // Throws std::invalid_argument naming the field.
   void validate() const;
+  bool active() const { return enabled && weight > 0.0; }  // learned and used at all
 };
 
 // One frame set's measurement of the trunk's colour.

@@ -129,9 +129,9 @@ class PixelClassifier {
   // Throws std::invalid_argument for a negative or non-finite weight, or a covariance that is
   // not positive definite.
   void setClothingColour(const ColourGaussian* colour, double weight);
-  // The clothing colour in use, or nullptr; its weight.
-  const ColourGaussian* clothingColour() const { return has_clothing_ ? &clothing_ : nullptr; }
-  double clothingWeight() const { return has_clothing_ ? clothing_weight_ : 0.0; }
+  // The clothing colour in use as a one-component mixture, or nullptr; its weight.
+  const GaussianMixture2D* clothingModel() const { return clothing_.empty() ? nullptr : &clothing_; }
+  double clothingWeight() const { return clothing_weight_; }
   const PixelClassifierParams& params() const { return params_; }
   const ClassPriors& priors() const { return priors_; }
   const GaussianMixture2D& skinModel() const { return skin_; }
@@ -182,8 +182,7 @@ class PixelClassifier {
   PixelClassifierParams params_;
   ClassPriors priors_;
   std::vector<detail::SkinKernelTerm> skin_terms_;
-  bool has_clothing_ = false;
-  ColourGaussian clothing_;
+  GaussianMixture2D clothing_;  // empty: none (its constructor validates the Gaussian)
   double clothing_weight_ = 0.0;
 };
 

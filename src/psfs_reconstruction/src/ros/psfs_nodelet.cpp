@@ -670,28 +670,25 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("clothing colour (ms)", clothing_ms_.mean());
   }
 
-  std::string describeClothing(const ClothingColourModel& m) const {
-    if (!cfg_.params.clothing.enabled || cfg_.params.clothing.weight == 0.0) return "off";
-    if (!m.valid()) return "none yet";
-    char b[96];
-    std::snprintf(b, sizeof(b), "rg (%.3f, %.3f), sd (%.3f, %.3f)", m.colour().mean.x(),
-                  m.colour().mean.y(), std::sqrt(m.colour().covariance(0, 0)),
-                  std::sqrt(m.colour().covariance(1, 1)));
+  // The clothing colour for the diagnostics (clothing_colour.h): the one in use, and this set's
+  // measurement.
+  static std::string describeColour(const ColourGaussian& c) {
+    char b[64];
+    std::snprintf(b, sizeof(b), "rg (%.3f, %.3f), sd (%.3f, %.3f)", c.mean.x(), c.mean.y(),
+                  std::sqrt(c.covariance(0, 0)), std::sqrt(c.covariance(1, 1)));
     return b;
   }
-
-  // The clothing colour's measurement for the diagnostics (clothing_colour.h).
+  std::string describeClothing(const ClothingColourModel& m) const {
+    if (!cfg_.params.clothing.active()) return "off";
+    return m.valid() ? describeColour(m.colour()) : "none yet";
+  }
   std::string describeTrunkColour(const TrunkColourSample& t) const {
-    if (!cfg_.params.clothing.enabled || cfg_.params.clothing.weight == 0.0) return "off";
-    char b[160];
-    if (t.valid)
-      std::snprintf(b, sizeof(b), "rg (%.3f, %.3f), sd (%.3f, %.3f), %d samples, %.0f %% inliers",
-                    t.colour.mean.x(), t.colour.mean.y(), std::sqrt(t.colour.covariance(0, 0)),
-                    std::sqrt(t.colour.covariance(1, 1)), t.samples, 100.0 * t.inlier_fraction);
-    else
-      std::snprintf(b, sizeof(b), "not measured: %d trunk voxels, %d samples, %.0f %% inliers",
-                    t.band_voxels, t.samples, 100.0 * t.inlier_fraction);
-    return b;
+    if (!cfg_.params.clothing.active()) return "off";
+    char b[96];
+    std::snprintf(b, sizeof(b), "%s %d trunk voxels, %d samples, %.0f %% inliers",
+                  t.valid ? "" : "not measured:", t.band_voxels, t.samples,
+                  100.0 * t.inlier_fraction);
+    return t.valid ? describeColour(t.colour) + "," + b : std::string(b);
   }
 
   static constexpr size_t kShedWindow = 50;  // recent sets the shedding decision looks at
