@@ -1,5 +1,6 @@
 #include "psfs_reconstruction/probability_volume.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace psfs {
@@ -8,6 +9,16 @@ size_t countAbove(const ProbabilityVolume& v, uint8_t t) {
   size_t n = 0;
   for (uint8_t b : v.data) n += b > t;
   return n;
+}
+
+int clearBelow(double z, ProbabilityVolume* v) {
+  const VoxelGrid& g = v->grid;
+  const size_t layer = size_t(g.dims.x()) * size_t(g.dims.y());
+  int layers = 0;
+  while (layers < g.dims.z() && g.centre(0, 0, layers).z() < z) ++layers;
+  layers = std::min(layers, int(v->data.size() / std::max<size_t>(layer, 1)));
+  std::fill(v->data.begin(), v->data.begin() + long(layer * size_t(layers)), uint8_t(0));
+  return layers;
 }
 
 double volumeIoU(const ProbabilityVolume& a, uint8_t ta, const ProbabilityVolume& b, uint8_t tb) {

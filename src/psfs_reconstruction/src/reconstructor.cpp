@@ -509,6 +509,7 @@ void Reconstructor::reconstruct(const std::vector<cv::Mat>& rgb,
       gpu_->fuseHand(*hand_tables_[h], &r.hands[h]);
     else
       hand_fusion_.fuse(*hand_tables_[h], skin_evidence_, &r.hands[h]);
+    if (params_.hand_roi_clip_floor) clearBelow(params_.workspace.min_corner.z(), &r.hands[h]);
   }
   r.times.hands = msSince(t0);
 

@@ -68,6 +68,7 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
   s->add("fusion/footprint_scale", &p.footprint_scale);
   s->add("hand_volumes/edge", &p.hand_roi_edge)
       .add("hand_volumes/voxels", &p.hand_roi_voxels)
+      .add("hand_volumes/clip_below_floor", &p.hand_roi_clip_floor)
       .add("hand_volumes/topic", &c->nodelet.hand_roi_topic)
       .add("hand_volumes/max_age", &c->nodelet.hand_roi_max_age)
       .add("hand_volumes/max_hands", &c->nodelet.max_hand_rois);

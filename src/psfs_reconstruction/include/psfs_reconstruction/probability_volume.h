@@ -28,6 +28,10 @@ inline uint8_t thresholdByte(double t) {
 // Number of voxels with value > threshold_byte.
 size_t countAbove(const ProbabilityVolume& v, uint8_t threshold_byte);
 
+// Sets every voxel whose centre lies below height z (world) to 0; returns the number of z
+// layers cleared.
+int clearBelow(double z, ProbabilityVolume* v);
+
 // Intersection over union of {a > ta} and {b > tb} (same grid; throws std::invalid_argument
 // otherwise). Returns 1 when both sets are empty.
 double volumeIoU(const ProbabilityVolume& a, uint8_t ta, const ProbabilityVolume& b, uint8_t tb);

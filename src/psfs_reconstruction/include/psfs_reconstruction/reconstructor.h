@@ -78,6 +78,11 @@ struct ReconstructorParams {
   // requested ROI centre, snapped to a world lattice (0.30 m / 83 = 3.6 mm voxels, thesis 4.3).
   double hand_roi_edge = 0.30;
   int hand_roi_voxels = 83;
+  // Hand sub-volumes hold nothing below the workspace's floor (workspace.min_corner z, the desk
+  // top in DESIGN's world frame). A hand on the desk puts half its cube under the desk top, and
+  // those voxels, hidden from every camera by the desk, project onto the hand above them in
+  // every camera and fill with its evidence: a slab of phantom skin under the hand.
+  bool hand_roi_clip_floor = true;
   // Selective background update after each reconstructed frame (alpha in `background`).
   bool update_background = true;
   // Extra pixels added around the back-projected body volume before it masks the update: the
