@@ -25,6 +25,7 @@ TEST(HandMesherConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.mode, d.mode);
   EXPECT_EQ(c.close_at_border, d.close_at_border);
   EXPECT_EQ(c.min_component_triangles, d.min_component_triangles);
+  EXPECT_EQ(c.keep_radius, d.keep_radius);
   EXPECT_EQ(c.threads, d.threads);
   EXPECT_EQ(c.publish_markers, d.publish_markers);
   EXPECT_EQ(c.marker_color, d.marker_color);
@@ -39,6 +40,7 @@ TEST(HandMesherConfig, BadFilesNameTheFileAndTheKey) {
   EXPECT_NE(errorOf("iso: 1.5\n").find("iso: must be a probability"), std::string::npos);
   EXPECT_NE(errorOf("iso: high\n").find("iso: wrong type"), std::string::npos);
   EXPECT_NE(errorOf("mode: smooth\n").find("mode: must be"), std::string::npos);
+  EXPECT_NE(errorOf("keep_radius: -0.1\n").find("keep_radius: must be >= 0"), std::string::npos);
   EXPECT_NE(errorOf("marker_color: [1, 0, 0]\n").find("marker_color: expected a list of 4"), std::string::npos);
   EXPECT_NE(errorOf("marker_color: [1, 0, 0, 2]\n").find("marker_color: each of"), std::string::npos);
   EXPECT_THROW(isoByteLevel(0.0), std::invalid_argument);

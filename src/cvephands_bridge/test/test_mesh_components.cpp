@@ -1,5 +1,6 @@
 // Speck removal on meshes from marching cubes: a ball of radius 6 voxels next to a one-voxel
-// speck; components are counted and only the ball survives.
+// speck; components are counted and only the ball survives. The hand's component choice: of two
+// balls in one cube, the one the hand's centre lies in is kept.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -46,6 +47,62 @@ TEST(MeshComponents, CountsAndRemovesSpecks) {
   EXPECT_EQ(removeSmallComponents(&m, 1), 0u);   // 1 keeps everything
   TriangleMesh empty;
   EXPECT_EQ(removeSmallComponents(&empty, 64), 0u);
+}
+
+// Two balls of radius 4 voxels (1 cm voxels) centred at voxels (8, 8, 8) and (22, 22, 22), i.e.
+// at 0.085 m and 0.225 m on each axis, their surfaces 0.16 m apart.
+TriangleMesh twoBalls() {
+  static std::vector<uint8_t> data;
+  const int n = 30;
+  data.assign(size_t(n) * n * n, 0);
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x)
+        for (int c : {8, 22}) {
+          const double d = std::sqrt(double((x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c)));
+          if (d < 4.0) data[x + n * (y + size_t(n) * z)] = 255;
+        }
+  ProbabilityGridView g;
+  g.data = data.data();
+  g.dims = Eigen::Vector3i(n, n, n);
+  g.voxel_size = 0.01;
+  return marchingCubes(g);
+}
+
+size_t verticesNear(const TriangleMesh& m, const Eigen::Vector3f& c, float r) {
+  size_t k = 0;
+  for (const Eigen::Vector3f& v : m.vertices) k += (v - c).norm() < r;
+  return k;
+}
+
+TEST(MeshComponents, TheHandKeepsTheComponentsNearItsCentre) {
+  const Eigen::Vector3f a = Eigen::Vector3f::Constant(0.085f), b = Eigen::Vector3f::Constant(0.225f);
+  const TriangleMesh both = twoBalls();
+  std::vector<uint32_t> label;
+  ASSERT_EQ(labelComponents(both, &label), 2u);
+  // A hand at the first ball's centre, 8 cm: the other ball (its surface 0.20 m away) goes.
+  TriangleMesh m = both;
+  EXPECT_GT(keepHandComponents(&m, a, 64, 0.08f), 0u);
+  EXPECT_EQ(labelComponents(m, &label), 1u);
+  EXPECT_EQ(verticesNear(m, a, 0.05f), m.vertices.size());
+  EXPECT_EQ(m.normals.size(), m.vertices.size());
+  // A centre 3 cm outside the second ball's surface still keeps that ball and only it.
+  m = both;
+  keepHandComponents(&m, b + Eigen::Vector3f(0.07f, 0, 0), 64, 0.08f);
+  EXPECT_EQ(verticesNear(m, b, 0.05f), m.vertices.size());
+  EXPECT_GT(m.numTriangles(), 64u);
+  // No component within the radius: the nearest one is kept (the mesh of a hand never vanishes
+  // because its centre drifted), here the second ball.
+  m = both;
+  keepHandComponents(&m, Eigen::Vector3f::Constant(0.29f), 64, 0.01f);
+  EXPECT_EQ(verticesNear(m, b, 0.05f), m.vertices.size());
+  // A radius that reaches both keeps both; 0 turns the choice off.
+  m = both;
+  EXPECT_EQ(keepHandComponents(&m, a, 64, 0.5f), 0u);
+  EXPECT_EQ(keepHandComponents(&m, a, 64, 0.0f), 0u);
+  EXPECT_EQ(m.numTriangles(), both.numTriangles());
+  TriangleMesh empty;
+  EXPECT_EQ(keepHandComponents(&empty, a, 64, 0.08f), 0u);
 }
 
 }  // namespace

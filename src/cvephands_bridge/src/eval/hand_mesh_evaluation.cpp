@@ -70,6 +70,7 @@ void validate(const HandMeshEvalOptions& o) {
   if (o.frames < 0) throw std::invalid_argument("evaluateHandMeshes: frames must be >= 0");
   if (!(o.iso > 0.0 && o.iso < 1.0)) throw std::invalid_argument("evaluateHandMeshes: iso in (0, 1)");
   if (!(o.border_voxels >= 0.0)) throw std::invalid_argument("evaluateHandMeshes: border_voxels < 0");
+  if (!(o.keep_radius >= 0.0)) throw std::invalid_argument("evaluateHandMeshes: keep_radius < 0");
 }
 
 MarchingCubesOptions meshingOptions(const HandMeshEvalOptions& o, MeshingMode mode) {
@@ -106,14 +107,16 @@ HandMeshSample HandMeshScorer::score(const psfs::ProbabilityVolume& vol,
   s.side = side;
   TriangleMesh pm, bm;
   auto t0 = std::chrono::steady_clock::now();
+  const Eigen::Vector3f centre = (0.5 * (vol.grid.origin + vol.grid.maxCorner())).cast<float>();
+  const float keep_radius = float(o.keep_radius);
   probabilistic_.extract(g, &pm);
-  removeSmallComponents(&pm, min_triangles);
+  keepHandComponents(&pm, centre, min_triangles, keep_radius);
   s.mesh_ms_probabilistic = msSince(t0);
   s.triangles_probabilistic = pm.numTriangles();
   if (with_binary) {
     t0 = std::chrono::steady_clock::now();
     binary_.extract(g, &bm);
-    removeSmallComponents(&bm, min_triangles);
+    keepHandComponents(&bm, centre, min_triangles, keep_radius);
     s.mesh_ms_binary = msSince(t0);
     s.triangles_binary = bm.numTriangles();
   }

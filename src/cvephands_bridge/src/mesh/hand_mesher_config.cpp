@@ -10,6 +10,7 @@ void addHandMesherKeys(HandMesherConfig* c, tabletop_common::ConfigSchema* s) {
       .add("mode", &c->mode)
       .add("close_at_border", &c->close_at_border)
       .add("min_component_triangles", &c->min_component_triangles)
+      .add("keep_radius", &c->keep_radius)
       .add("threads", &c->threads)
       .add("publish_markers", &c->publish_markers)
       .add("marker_color", &c->marker_color)
@@ -34,6 +35,8 @@ MarchingCubesOptions marchingCubesOptions(const HandMesherConfig& c) {
   if (c.threads < 0) throw std::invalid_argument("threads: must be >= 0");
   o.threads = c.threads;
   if (c.min_component_triangles < 0) throw std::invalid_argument("min_component_triangles: must be >= 0");
+  if (!(std::isfinite(c.keep_radius) && c.keep_radius >= 0.0))
+    throw std::invalid_argument("keep_radius: must be >= 0 m (0 keeps every component)");
   if (!(c.marker_color.minCoeff() >= 0.0 && c.marker_color.maxCoeff() <= 1.0))
     throw std::invalid_argument("marker_color: each of r, g, b, a must lie in [0, 1]");
   if (c.world_frame.empty()) throw std::invalid_argument("world_frame: must not be empty");

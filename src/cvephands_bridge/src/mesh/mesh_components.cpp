@@ -1,5 +1,7 @@
 #include "cvephands_bridge/mesh/mesh_components.h"
 
+#include <algorithm>
+#include <limits>
 #include <numeric>
 
 namespace cvephands {
@@ -38,18 +40,18 @@ size_t labelComponents(const TriangleMesh& mesh, std::vector<uint32_t>* vertex_l
   return count;
 }
 
-size_t removeSmallComponents(TriangleMesh* mesh, size_t min_triangles) {
-  if (min_triangles <= 1 || mesh->triangles.empty()) return 0;
-  std::vector<uint32_t> label;
-  const size_t components = labelComponents(*mesh, &label);
-  std::vector<size_t> triangles_of(components, 0);
-  for (size_t t = 0; t + 2 < mesh->triangles.size(); t += 3) ++triangles_of[label[mesh->triangles[t]]];
+namespace {
+
+// Keeps the triangles of the components with keep[label] set; vertices in the order of their
+// first use (deterministic), normals follow their vertices. Returns the triangles removed.
+size_t keepComponents(TriangleMesh* mesh, const std::vector<uint32_t>& label,
+                      const std::vector<bool>& keep) {
   std::vector<uint32_t> new_index(mesh->vertices.size(), UINT32_MAX);
   std::vector<uint32_t> kept;
   kept.reserve(mesh->triangles.size());
   uint32_t next = 0;
   for (size_t t = 0; t + 2 < mesh->triangles.size(); t += 3) {
-    if (triangles_of[label[mesh->triangles[t]]] < min_triangles) continue;
+    if (!keep[label[mesh->triangles[t]]]) continue;
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = mesh->triangles[t + k];
       if (new_index[v] == UINT32_MAX) new_index[v] = next++;
@@ -58,7 +60,6 @@ size_t removeSmallComponents(TriangleMesh* mesh, size_t min_triangles) {
   }
   const size_t removed = (mesh->triangles.size() - kept.size()) / 3;
   if (removed == 0) return 0;
-  // Vertices in the order of their first use keeps the output deterministic; move them.
   std::vector<Eigen::Vector3f> vertices(next), normals(mesh->hasNormals() ? next : 0);
   for (size_t v = 0; v < new_index.size(); ++v) {
     if (new_index[v] == UINT32_MAX) continue;
@@ -68,6 +69,40 @@ size_t removeSmallComponents(TriangleMesh* mesh, size_t min_triangles) {
   mesh->vertices.swap(vertices);
   mesh->normals.swap(normals);
   mesh->triangles.swap(kept);
+  return removed;
+}
+
+}  // namespace
+
+size_t removeSmallComponents(TriangleMesh* mesh, size_t min_triangles) {
+  if (min_triangles <= 1 || mesh->triangles.empty()) return 0;
+  std::vector<uint32_t> label;
+  const size_t components = labelComponents(*mesh, &label);
+  std::vector<size_t> triangles_of(components, 0);
+  for (size_t t = 0; t + 2 < mesh->triangles.size(); t += 3) ++triangles_of[label[mesh->triangles[t]]];
+  std::vector<bool> keep(components);
+  for (size_t c = 0; c < components; ++c) keep[c] = triangles_of[c] >= min_triangles;
+  return keepComponents(mesh, label, keep);
+}
+
+size_t keepComponentsNear(TriangleMesh* mesh, const Eigen::Vector3f& centre, float radius) {
+  if (mesh->triangles.empty()) return 0;
+  std::vector<uint32_t> label;
+  const size_t components = labelComponents(*mesh, &label);
+  // Each component's nearest approach to the centre, over the vertices its triangles use.
+  std::vector<float> nearest(components, std::numeric_limits<float>::infinity());
+  for (uint32_t v : mesh->triangles)
+    nearest[label[v]] = std::min(nearest[label[v]], (mesh->vertices[v] - centre).norm());
+  const float closest = *std::min_element(nearest.begin(), nearest.end());
+  std::vector<bool> keep(components);
+  for (size_t c = 0; c < components; ++c) keep[c] = nearest[c] <= radius || nearest[c] == closest;
+  return keepComponents(mesh, label, keep);
+}
+
+size_t keepHandComponents(TriangleMesh* mesh, const Eigen::Vector3f& centre, size_t min_triangles,
+                          float keep_radius) {
+  size_t removed = removeSmallComponents(mesh, min_triangles);
+  if (keep_radius > 0) removed += keepComponentsNear(mesh, centre, keep_radius);
   return removed;
 }
 

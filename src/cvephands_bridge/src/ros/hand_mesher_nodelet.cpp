@@ -63,6 +63,7 @@ class HandMesherNodelet : public nodelet::Nodelet {
     }
     publish_markers_ = cfg.publish_markers;
     min_component_triangles_ = cfg.min_component_triangles;
+    keep_radius_ = float(cfg.keep_radius);
     world_frame_ = cfg.world_frame;
     color_.r = float(cfg.marker_color[0]), color_.g = float(cfg.marker_color[1]);
     color_.b = float(cfg.marker_color[2]), color_.a = float(cfg.marker_color[3]);
@@ -109,7 +110,9 @@ class HandMesherNodelet : public nodelet::Nodelet {
         const ProbabilityGridView grid = gridView(msg->volumes[i]);
         const ros::WallTime t0 = ros::WallTime::now();
         mc_->extract(grid, &mesh_);
-        removeSmallComponents(&mesh_, size_t(std::max(0, min_component_triangles_)));
+        const Eigen::Vector3d centre = grid.origin + 0.5 * grid.voxel_size * grid.dims.cast<double>();
+        keepHandComponents(&mesh_, centre.cast<float>(), size_t(std::max(0, min_component_triangles_)),
+                           keep_radius_);
         mesh_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
       } catch (const std::exception& e) {
         ++rejected_;
@@ -174,6 +177,7 @@ class HandMesherNodelet : public nodelet::Nodelet {
   std::string fatal_, world_frame_;
   bool publish_markers_ = true;
   int min_component_triangles_ = 64;
+  float keep_radius_ = 0.08f;
   std_msgs::ColorRGBA color_;
   ros::Subscriber sub_;
   ros::Publisher mesh_pub_, marker_pub_;

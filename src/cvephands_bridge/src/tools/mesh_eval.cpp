@@ -22,7 +22,7 @@ namespace {
 void usage() {
   std::fprintf(stderr,
                "usage: mesh_eval [--scenario NAME] [--script NAME] [--frames N] [--every K] [--seed N] [--iso P] "
-               "[--min-component N] [--out DIR]\n"
+               "[--min-component N] [--keep-radius M] [--out DIR]\n"
                "  --scenario  simulated world: default, a preset or random-SEED (default default)\n"
                "  --script  simulated motion script (default reach_targets)\n"
                "  --frames  script frames after the 25 background frames (default: whole script)\n"
@@ -30,6 +30,8 @@ void usage() {
                "  --seed    sensor noise seed (default 1)\n"
                "  --iso     iso-surface probability (default 0.6)\n"
                "  --min-component  drop mesh components under N triangles (default 64)\n"
+               "  --keep-radius    drop mesh components no nearer than M metres to the hand (default\n"
+               "                   0.08, as config/hand_mesher.yaml; 0 keeps them)\n"
                "  --out     output folder (default ./output)\n");
 }
 
@@ -73,6 +75,7 @@ int main(int argc, char** argv) {
     else if (args.is("--seed")) o.seed = static_cast<int>(args.integer(0));
     else if (args.is("--iso")) o.iso = args.number(0.0, 1.0);
     else if (args.is("--min-component")) o.min_component_triangles = static_cast<int>(args.integer(0));
+    else if (args.is("--keep-radius")) o.keep_radius = args.number(0.0, 1.0);
     else if (args.is("--out")) out = args.text();
     else if (args.help()) {
       usage();

@@ -61,7 +61,8 @@ void usage() {
   std::fprintf(
       stderr,
       "usage: scenario_suite [--scenarios a,b,c] [--random N --first-seed S] [--frames F]\n"
-      "                      [--script NAME] [--seed N] [--mesh-every K] [--empty-frames E]\n"
+      "                      [--script NAME] [--seed N] [--mesh-every K] [--keep-radius M]\n"
+      "                      [--empty-frames E]\n"
       "                      [--iou-threshold P] [--out DIR] [--quick]\n"
       "                      [--assert-bars design|regression|none] [--no-body]\n"
       "  --scenarios LIST  scenario names, comma-separated (\"default\", presets, random-<seed>)\n"
@@ -73,6 +74,8 @@ void usage() {
       "                    ones take all)\n"
       "  --seed N          sensor noise and tracker seed (default 1)\n"
       "  --mesh-every K    score the hand meshes every K-th person frame (default 10, 0 = off)\n"
+      "  --keep-radius M   the meshes keep only components within M metres of the hand (default\n"
+      "                    0.08 as cvephands_bridge/config/hand_mesher.yaml; 0 keeps them all)\n"
       "  --empty-frames E  empty-scene sets scored after the 25 learning sets (default 10)\n"
       "  --iou-threshold P voxel occupied at p >= P for the volume IoU (default 0.5)\n"
       "  --out DIR         output folder (default ./scenario_suite)\n"
@@ -203,6 +206,7 @@ int main(int argc, char** argv) {
   bool have_names = false, have_random = false, quick = false;
   int random_count = 24, first_seed = 1;
   int frames = -1, mesh_every = -1, empty_frames = -1;  // -1: not given
+  double keep_radius = -1;
   std::string script, out = "scenario_suite", assert_bars = "none";
   std::string psfs_config, mpf_config, papf_config, skin_model;
   bool body = true;
@@ -216,6 +220,7 @@ int main(int argc, char** argv) {
     else if (args.is("--script")) script = args.text();
     else if (args.is("--seed")) base.seed = static_cast<uint64_t>(args.integer(0));
     else if (args.is("--mesh-every")) mesh_every = static_cast<int>(args.integer(0));
+    else if (args.is("--keep-radius")) keep_radius = args.number(0.0, 1.0);
     else if (args.is("--empty-frames")) empty_frames = static_cast<int>(args.integer(0));
     else if (args.is("--iou-threshold")) base.occupancy_threshold = args.number(0.01, 0.99);
     else if (args.is("--out")) out = args.text();
@@ -254,6 +259,7 @@ int main(int argc, char** argv) {
   if (entries.empty()) args.fail("no scenario to run");
   base.frames = frames >= 0 ? frames : (quick ? kQuickFrames : 0);
   base.mesh_every = mesh_every >= 0 ? mesh_every : (quick ? kQuickMeshEvery : base.mesh_every);
+  if (keep_radius >= 0) base.mesh.keep_radius = keep_radius;
   if (empty_frames >= 0) base.empty_frames = empty_frames;
 
   if (psfs_config.empty() || mpf_config.empty()) {

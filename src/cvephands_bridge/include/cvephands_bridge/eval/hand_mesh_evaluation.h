@@ -39,6 +39,8 @@ struct HandMeshEvalOptions {
   double spacing = 0.001;     // truth sample spacing (m)
   double border_voxels = 2.0; // band along the cube faces left out (caps)
   int min_component_triangles = 64;  // specks below this are dropped, as the HandMesher does
+  double keep_radius = 0.08;  // m; components no nearer to the cube's centre are dropped (as the
+                              // HandMesher does; 0 keeps them)
   double hand_edge = 0.30;    // hand cube edge (m) and voxels per side: the pipeline's defaults
   int hand_voxels = 83;
   // Called once per scored frame (progress output).
@@ -78,9 +80,9 @@ HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& options);
 
 // The per-hand step of evaluateHandMeshes, for loops that make their own hand sub-volumes (the
 // scenario evaluation): meshes one sub-volume (probabilistic and, if asked, binary marching
-// cubes; specks removed) and scores the meshes against the true skin surface inside the cube,
-// with the options' iso, spacing, border_voxels, min_component_triangles and seed (the other
-// fields are not used). Throws std::invalid_argument for bad options.
+// cubes; specks and components away from the hand removed) and scores the meshes against the
+// true skin surface inside the cube, with the options' iso, spacing, border_voxels,
+// min_component_triangles, keep_radius and seed (the other fields are not used). Throws std::invalid_argument for bad options.
 class HandMeshScorer {
  public:
   explicit HandMeshScorer(const HandMeshEvalOptions& options);

@@ -74,8 +74,8 @@ struct ScenarioEvalOptions {
   // psfs_reconstruction/config/skin_gmm.yaml; "" = the skin model psfs_config names (then
   // psfs_config is required).
   std::string skin_model;
-  // The meshing and mesh scoring fields (iso, spacing, border_voxels, min_component_triangles;
-  // the seed is `seed` above). The hand cubes are the pSfS configuration's (hand_roi_edge,
+  // The meshing and mesh scoring fields (iso, spacing, border_voxels, min_component_triangles,
+  // keep_radius; the seed is `seed` above). The hand cubes are the pSfS configuration's (hand_roi_edge,
   // hand_roi_voxels: 30 cm, 83^3 by default).
   HandMeshEvalOptions mesh;
   // The scenario's description for the report (e.g. tabletop_sim's Scenario::describe());

@@ -17,6 +17,7 @@ struct HandMesherConfig {
   std::string mode = "probabilistic";   // or "binary" (threshold first: the thesis' comparison)
   bool close_at_border = true;
   int min_component_triangles = 64;     // smaller components (skin-coloured specks) are dropped
+  double keep_radius = 0.08;            // m; components farther from the hand are dropped (0: off)
   int threads = 1;
   bool publish_markers = true;
   Eigen::Vector4d marker_color{0.93, 0.72, 0.60, 1.0};  // RGBA
