@@ -70,6 +70,12 @@ TEST(HandMesher, MeshesHandVolumesAndDeletesLostHands) {
   two->header.frame_id = "world";
   two->target_ids = {3, 4};
   two->volumes = {ball(o3), ball(o4)};
+  // Hand 4's cube also holds a 2 cm blob in a corner, 0.18 m from the hand (the face or the
+  // other hand in a real cube): hundreds of triangles, not a speck, but beyond keep_radius
+  // (hand_mesher.yaml, 0.08 m), so its mesh is the ball alone.
+  for (int z = 5; z < 11; ++z)
+    for (int y = 5; y < 11; ++y)
+      for (int x = 5; x < 11; ++x) two->volumes[1].data[x + kN * (y + size_t(kN) * z)] = 255;
   pub.publish(two);
   ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> l(m); return meshes.size() >= 1 && markers.size() >= 1; }, 10.0));
   {

@@ -1,6 +1,6 @@
 // Speck removal on meshes from marching cubes: a ball of radius 6 voxels next to a one-voxel
 // speck; components are counted and only the ball survives. The hand's component choice: of two
-// balls in one cube, the one the hand's centre lies in is kept.
+// balls in one cube, the one near the hand's centre is kept.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -91,11 +91,12 @@ TEST(MeshComponents, TheHandKeepsTheComponentsNearItsCentre) {
   keepHandComponents(&m, b + Eigen::Vector3f(0.07f, 0, 0), 64, 0.08f);
   EXPECT_EQ(verticesNear(m, b, 0.05f), m.vertices.size());
   EXPECT_GT(m.numTriangles(), 64u);
-  // No component within the radius: the nearest one is kept (the mesh of a hand never vanishes
-  // because its centre drifted), here the second ball.
+  // No component within the radius (a centre 8 cm from both balls' surfaces): nothing is this
+  // hand's, the mesh is empty.
   m = both;
-  keepHandComponents(&m, Eigen::Vector3f::Constant(0.29f), 64, 0.01f);
-  EXPECT_EQ(verticesNear(m, b, 0.05f), m.vertices.size());
+  EXPECT_EQ(keepHandComponents(&m, Eigen::Vector3f(0.155f, 0.155f, 0.155f), 64, 0.02f),
+            both.numTriangles());
+  EXPECT_TRUE(m.empty());
   // A radius that reaches both keeps both; 0 turns the choice off.
   m = both;
   EXPECT_EQ(keepHandComponents(&m, a, 64, 0.5f), 0u);

@@ -75,35 +75,26 @@ size_t keepComponents(TriangleMesh* mesh, const std::vector<uint32_t>& label,
 }  // namespace
 
 size_t removeSmallComponents(TriangleMesh* mesh, size_t min_triangles) {
-  if (min_triangles <= 1 || mesh->triangles.empty()) return 0;
-  std::vector<uint32_t> label;
-  const size_t components = labelComponents(*mesh, &label);
-  std::vector<size_t> triangles_of(components, 0);
-  for (size_t t = 0; t + 2 < mesh->triangles.size(); t += 3) ++triangles_of[label[mesh->triangles[t]]];
-  std::vector<bool> keep(components);
-  for (size_t c = 0; c < components; ++c) keep[c] = triangles_of[c] >= min_triangles;
-  return keepComponents(mesh, label, keep);
-}
-
-size_t keepComponentsNear(TriangleMesh* mesh, const Eigen::Vector3f& centre, float radius) {
-  if (mesh->triangles.empty()) return 0;
-  std::vector<uint32_t> label;
-  const size_t components = labelComponents(*mesh, &label);
-  // Each component's nearest approach to the centre, over the vertices its triangles use.
-  std::vector<float> nearest(components, std::numeric_limits<float>::infinity());
-  for (uint32_t v : mesh->triangles)
-    nearest[label[v]] = std::min(nearest[label[v]], (mesh->vertices[v] - centre).norm());
-  const float closest = *std::min_element(nearest.begin(), nearest.end());
-  std::vector<bool> keep(components);
-  for (size_t c = 0; c < components; ++c) keep[c] = nearest[c] <= radius || nearest[c] == closest;
-  return keepComponents(mesh, label, keep);
+  return keepHandComponents(mesh, Eigen::Vector3f::Zero(), min_triangles, 0.0f);
 }
 
 size_t keepHandComponents(TriangleMesh* mesh, const Eigen::Vector3f& centre, size_t min_triangles,
                           float keep_radius) {
-  size_t removed = removeSmallComponents(mesh, min_triangles);
-  if (keep_radius > 0) removed += keepComponentsNear(mesh, centre, keep_radius);
-  return removed;
+  const bool by_size = min_triangles > 1, by_distance = keep_radius > 0;
+  if ((!by_size && !by_distance) || mesh->triangles.empty()) return 0;
+  std::vector<uint32_t> label;
+  const size_t components = labelComponents(*mesh, &label);
+  std::vector<size_t> triangles_of(components, 0);
+  for (size_t t = 0; t + 2 < mesh->triangles.size(); t += 3) ++triangles_of[label[mesh->triangles[t]]];
+  // Each component's nearest approach to the centre, over the vertices its triangles use.
+  std::vector<float> nearest(components, std::numeric_limits<float>::infinity());
+  if (by_distance)
+    for (uint32_t v : mesh->triangles)
+      nearest[label[v]] = std::min(nearest[label[v]], (mesh->vertices[v] - centre).norm());
+  std::vector<bool> keep(components);
+  for (size_t c = 0; c < components; ++c)
+    keep[c] = (!by_size || triangles_of[c] >= min_triangles) && (!by_distance || nearest[c] <= keep_radius);
+  return keepComponents(mesh, label, keep);
 }
 
 }  // namespace cvephands

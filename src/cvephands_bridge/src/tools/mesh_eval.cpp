@@ -104,7 +104,9 @@ int main(int argc, char** argv) {
   const std::string text = "==== hand meshes vs the true hand surface ====\nsimulated rig, script '" +
                            o.script + "', seed " + std::to_string(o.seed) + ", iso " +
                            std::to_string(o.iso).substr(0, 4) + ", 83^3 / 30 cm hand volumes, " +
-                           "every " + std::to_string(o.every) + ". frame\n" + r.summary();
+                           "components within " + std::to_string(o.keep_radius).substr(0, 4) +
+                           " m of the hand, every " + std::to_string(o.every) + ". frame\n" +
+                           r.summary();
   std::printf("%s", text.c_str());
   if (std::system(("mkdir -p '" + out + "'").c_str()) != 0) {
     std::fprintf(stderr, "mesh_eval: cannot create %s\n", out.c_str());

@@ -365,11 +365,11 @@ int main(int argc, char** argv) {
   char settings[512];
   std::snprintf(settings, sizeof(settings),
                 "%s person frames after %d empty-scene frames (and the 25 background-learning "
-                "ones), seed %llu, meshes every %d person frames%s, volumes at p >= %.2f on %s, "
-                "PAPF %s, %.0f s in all",
+                "ones), seed %llu, meshes every %d person frames%s (components within %.2f m of "
+                "the hand), volumes at p >= %.2f on %s, PAPF %s, %.0f s in all",
                 base.frames > 0 ? std::to_string(base.frames).c_str() : "whole-script", base.empty_frames,
                 static_cast<unsigned long long>(base.seed), base.mesh_every, base.mesh_every ? "" : " (off)",
-                base.occupancy_threshold, grid.empty() ? "(no scenario ran)" : grid.c_str(),
+                base.mesh.keep_radius, base.occupancy_threshold, grid.empty() ? "(no scenario ran)" : grid.c_str(),
                 body ? "on" : "off (--no-body)", elapsed());
   c.settings = std::string(quick ? "quick subset; " : "") + settings;
   c.plots = plots;

@@ -3,12 +3,13 @@
 // errors). Every message is decoded (the next delta frame needs it), but only the newest frame
 // of each hand is meshed (mesh()), so a page that renders slower than the rigs send keeps up.
 import { HandStreamDecoder } from './hand_decoder.js';
-import { removeSmallComponents } from './mesh_components.js';
+import { keepHandComponents } from './mesh_components.js';
 import { marchingCubes } from './marching_cubes.js';
 import { nowMs } from './room_connection.js';
 
-// What HandMesher drops as specks (config/hand_mesher.yaml min_component_triangles).
+// What HandMesher drops (config/hand_mesher.yaml min_component_triangles, keep_radius).
 const MIN_COMPONENT_TRIANGLES = 64;
+const KEEP_RADIUS = 0.08;
 
 export class HandStreams {
   constructor() {
@@ -71,10 +72,11 @@ export class HandStreams {
     for (const h of this.latest.values()) {
       const f = h.frame;
       const t0 = nowMs();
-      const mesh = removeSmallComponents(marchingCubes(
+      const centre = [0, 1, 2].map((k) => f.origin[k] + 0.5 * f.voxelSize * f.dims[k]);
+      const mesh = keepHandComponents(marchingCubes(
         { data: f.data, dims: f.dims, origin: f.origin, voxelSize: f.voxelSize },
         { iso: f.isoByte + 0.5, computeNormals: true },
-      ), MIN_COMPONENT_TRIANGLES);
+      ), MIN_COMPONENT_TRIANGLES, centre, KEEP_RADIUS);
       out.push({ sender: h.sender, target: f.targetId, mesh,
         stampMs: f.stampSec * 1000 + f.stampNsec / 1e6, serverMs: h.serverMs,
         decodeMs: h.decodeMs, meshMs: nowMs() - t0 });

@@ -1,8 +1,10 @@
-// Drops the small connected components of a mesh (specks: a voxel or two of skin-coloured noise
-// that enough views agree on), as the HandMesher does for rviz (src/mesh/mesh_components.cpp, same
-// rule: components with fewer than minTriangles triangles go; kept vertices and triangles keep
-// their order).
-export function removeSmallComponents(mesh, minTriangles = 64) {
+// Drops the connected components of a hand's mesh that HandMesher drops for rviz and the CVE
+// (src/mesh/mesh_components.cpp keepHandComponents, same rule): specks (components with fewer
+// than minTriangles triangles: a voxel or two of skin-coloured noise that enough views agree on)
+// and, with keepRadius > 0, the components with no vertex within keepRadius of `centre` (the
+// face, the other hand or skin-coloured clutter in the hand's cube). Kept vertices and
+// triangles keep their order.
+export function keepHandComponents(mesh, minTriangles = 64, centre = null, keepRadius = 0) {
   const { positions, normals, indices } = mesh;
   const n = positions.length / 3;
   const parent = new Uint32Array(n);
@@ -23,12 +25,23 @@ export function removeSmallComponents(mesh, minTriangles = 64) {
   }
   const triangles = new Uint32Array(n);
   for (let t = 0; t < indices.length; t += 3) ++triangles[root(indices[t])];
-  let small = false;
-  for (let v = 0; v < n && !small; ++v) small = parent[v] === v && triangles[v] > 0 && triangles[v] < minTriangles;
-  if (!small) return mesh;
+  const byDistance = centre !== null && keepRadius > 0;
+  const nearest = new Float64Array(n).fill(Infinity);
+  if (byDistance) {
+    for (const v of indices) {
+      const dx = positions[3 * v] - centre[0], dy = positions[3 * v + 1] - centre[1];
+      const dz = positions[3 * v + 2] - centre[2];
+      const r = root(v);
+      nearest[r] = Math.min(nearest[r], Math.sqrt(dx * dx + dy * dy + dz * dz));
+    }
+  }
+  const keep = (r) => triangles[r] >= minTriangles && (!byDistance || nearest[r] <= keepRadius);
+  let drop = false;
+  for (let v = 0; v < n && !drop; ++v) drop = parent[v] === v && triangles[v] > 0 && !keep(v);
+  if (!drop) return mesh;
   const newIndex = new Int32Array(n).fill(-1);
   let kept = 0;
-  for (let v = 0; v < n; ++v) if (triangles[root(v)] >= minTriangles) newIndex[v] = kept++;
+  for (let v = 0; v < n; ++v) if (keep(root(v))) newIndex[v] = kept++;
   const p = new Float32Array(3 * kept);
   const nm = normals ? new Float32Array(3 * kept) : null;
   for (let v = 0; v < n; ++v) {
@@ -43,4 +56,9 @@ export function removeSmallComponents(mesh, minTriangles = 64) {
     out.push(newIndex[indices[t]], newIndex[indices[t + 1]], newIndex[indices[t + 2]]);
   }
   return { positions: p, normals: nm, indices: Uint32Array.from(out) };
+}
+
+// Specks only (keepHandComponents without the distance rule).
+export function removeSmallComponents(mesh, minTriangles = 64) {
+  return keepHandComponents(mesh, minTriangles);
 }

@@ -29,7 +29,7 @@ inline uint8_t thresholdByte(double t) {
 size_t countAbove(const ProbabilityVolume& v, uint8_t threshold_byte);
 
 // Sets every voxel whose centre lies below height z (world) to 0; returns the number of z
-// layers cleared.
+// layers cleared. Throws std::invalid_argument if the data does not match the grid.
 int clearBelow(double z, ProbabilityVolume* v);
 
 // Intersection over union of {a > ta} and {b > tb} (same grid; throws std::invalid_argument

@@ -79,9 +79,9 @@ struct ReconstructorParams {
   double hand_roi_edge = 0.30;
   int hand_roi_voxels = 83;
   // Hand sub-volumes hold nothing below the workspace's floor (workspace.min_corner z, the desk
-  // top in DESIGN's world frame). A hand on the desk puts half its cube under the desk top, and
-  // those voxels, hidden from every camera by the desk, project onto the hand above them in
-  // every camera and fill with its evidence: a slab of phantom skin under the hand.
+  // top in DESIGN's world frame). A hand on the desk puts half its cube under the desk top;
+  // over the desk those voxels are hidden from every camera, project onto the hand above them
+  // in all of them and fill with its evidence: a slab of phantom skin under the hand.
   bool hand_roi_clip_floor = true;
   // Selective background update after each reconstructed frame (alpha in `background`).
   bool update_background = true;

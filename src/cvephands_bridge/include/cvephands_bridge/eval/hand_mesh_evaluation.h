@@ -82,7 +82,8 @@ HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& options);
 // scenario evaluation): meshes one sub-volume (probabilistic and, if asked, binary marching
 // cubes; specks and components away from the hand removed) and scores the meshes against the
 // true skin surface inside the cube, with the options' iso, spacing, border_voxels,
-// min_component_triangles, keep_radius and seed (the other fields are not used). Throws std::invalid_argument for bad options.
+// min_component_triangles, keep_radius and seed (the other fields are not used). Throws
+// std::invalid_argument for bad options.
 class HandMeshScorer {
  public:
   explicit HandMeshScorer(const HandMeshEvalOptions& options);

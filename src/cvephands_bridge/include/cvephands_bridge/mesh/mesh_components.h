@@ -4,7 +4,8 @@
 // centimetres from the hand. They are not hand geometry, they spoil the display and every
 // distance statistic, and no amount of smoothing moves them; dropping components below a few
 // dozen triangles removes them without touching the hand (a fingertip cut off by the hull is a
-// few hundred triangles at 3.6 mm).
+// few hundred triangles at 3.6 mm). A hand's mesh also keeps only the components near the hand
+// (keepHandComponents).
 #pragma once
 
 #include <cstddef>
@@ -24,16 +25,12 @@ size_t labelComponents(const TriangleMesh& mesh, std::vector<uint32_t>* vertex_l
 // are dropped. Returns the number of triangles removed. min_triangles <= 1 keeps everything.
 size_t removeSmallComponents(TriangleMesh* mesh, size_t min_triangles);
 
-// Keeps the components that come within `radius` of `centre` (and the nearest one when none
-// does); the others are removed as above. Returns the number of triangles removed.
-size_t keepComponentsNear(TriangleMesh* mesh, const Eigen::Vector3f& centre, float radius);
-
 // What the hand meshing stage keeps of the mesh of a hand's sub-volume centred on `centre` (the
-// tracked hand): no component under `min_triangles` (specks), and none that stays farther than
-// `keep_radius` from the centre (0 = no such limit). A 30 cm cube around a hand also holds the
-// face, the other hand, skin-coloured clutter or clothing when they come near; they are other
-// targets' or nobody's, not this hand's, and their distance to the hand is what makes a
-// detached piece stand out in the meeting room. Returns the number of triangles removed.
+// tracked hand): the components with at least `min_triangles` triangles (<= 1: any size) that
+// come within `keep_radius` of the centre (0: anywhere). A 30 cm cube around a hand also holds
+// the face, the other hand, and skin-coloured hair, clothing or clutter when they come near:
+// other targets' skin or nobody's, not this hand. Nothing near the centre: an empty mesh.
+// Returns the number of triangles removed (order and normals as removeSmallComponents).
 size_t keepHandComponents(TriangleMesh* mesh, const Eigen::Vector3f& centre, size_t min_triangles,
                           float keep_radius);
 
