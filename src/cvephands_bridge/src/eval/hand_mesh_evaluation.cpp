@@ -145,6 +145,7 @@ HandMeshEvalResult evaluateHandMeshes(const HandMeshEvalOptions& o) {
   so.skin_model = o.skin_model;
   so.hand_edge = o.hand_edge;
   so.hand_voxels = o.hand_voxels;
+  so.clip_floor = o.clip_floor;
   HandMeshEvalResult r;
   std::vector<int> both_frames;
   std::vector<std::array<TriangleMesh, 4>> both_meshes;  // kept only for the picture

@@ -23,6 +23,7 @@ void visitSimHandFrames(const SimHandVolumeOptions& o,
   psfs::ReconstructorParams rp;
   rp.hand_roi_edge = o.hand_edge;
   rp.hand_roi_voxels = o.hand_voxels;
+  rp.hand_roi_clip_floor = o.clip_floor;
   psfs::Reconstructor recon(psfs::GaussianMixture2D::load(o.skin_model), rp);
 
   const int begin = so.empty_frames + o.first_frame;

@@ -22,7 +22,7 @@ namespace {
 void usage() {
   std::fprintf(stderr,
                "usage: mesh_eval [--scenario NAME] [--script NAME] [--frames N] [--every K] [--seed N] [--iso P] "
-               "[--min-component N] [--keep-radius M] [--out DIR]\n"
+               "[--min-component N] [--keep-radius M] [--no-floor-clip] [--out DIR]\n"
                "  --scenario  simulated world: default, a preset or random-SEED (default default)\n"
                "  --script  simulated motion script (default reach_targets)\n"
                "  --frames  script frames after the 25 background frames (default: whole script)\n"
@@ -32,6 +32,8 @@ void usage() {
                "  --min-component  drop mesh components under N triangles (default 64)\n"
                "  --keep-radius    drop mesh components no nearer than M metres to the hand (default\n"
                "                   0.08, as config/hand_mesher.yaml; 0 keeps them)\n"
+               "  --no-floor-clip  hand cubes keep what lies below the desk top (psfs.yaml\n"
+               "                   hand_volumes/clip_below_floor: false)\n"
                "  --out     output folder (default ./output)\n");
 }
 
@@ -76,6 +78,7 @@ int main(int argc, char** argv) {
     else if (args.is("--iso")) o.iso = args.number(0.0, 1.0);
     else if (args.is("--min-component")) o.min_component_triangles = static_cast<int>(args.integer(0));
     else if (args.is("--keep-radius")) o.keep_radius = args.number(0.0, 1.0);
+    else if (args.is("--no-floor-clip")) o.clip_floor = false;
     else if (args.is("--out")) out = args.text();
     else if (args.help()) {
       usage();
@@ -105,7 +108,8 @@ int main(int argc, char** argv) {
                            o.script + "', seed " + std::to_string(o.seed) + ", iso " +
                            std::to_string(o.iso).substr(0, 4) + ", 83^3 / 30 cm hand volumes, " +
                            "components within " + std::to_string(o.keep_radius).substr(0, 4) +
-                           " m of the hand, every " + std::to_string(o.every) + ". frame\n" +
+                           " m of the hand, " + (o.clip_floor ? "" : "no floor clip, ") + "every " +
+                           std::to_string(o.every) + ". frame\n" +
                            r.summary();
   std::printf("%s", text.c_str());
   if (std::system(("mkdir -p '" + out + "'").c_str()) != 0) {

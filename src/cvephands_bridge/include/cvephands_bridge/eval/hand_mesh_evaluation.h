@@ -43,6 +43,7 @@ struct HandMeshEvalOptions {
                               // HandMesher does; 0 keeps them)
   double hand_edge = 0.30;    // hand cube edge (m) and voxels per side: the pipeline's defaults
   int hand_voxels = 83;
+  bool clip_floor = true;     // hand cubes hold nothing below the desk top (psfs.yaml default)
   // Called once per scored frame (progress output).
   std::function<void(int frame, int total)> progress;
 };

@@ -30,6 +30,7 @@ struct SimHandVolumeOptions {
   std::string skin_model;      // path of psfs_reconstruction/config/skin_gmm.yaml
   double hand_edge = 0.30;     // cube edge (m) and voxels per side: the pipeline's defaults
   int hand_voxels = 83;
+  bool clip_floor = true;      // ReconstructorParams::hand_roi_clip_floor (the desk top)
 };
 
 struct SimHandVolume {
