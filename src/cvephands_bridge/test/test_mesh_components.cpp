@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "cvephands_bridge/mesh/marching_cubes.h"
@@ -12,22 +13,28 @@
 namespace cvephands {
 namespace {
 
-TriangleMesh ballAndSpeck(int n) {
+// Marching cubes of an n^3 grid of 1 cm voxels holding balls (centre voxel on the diagonal,
+// radius in voxels) and single-voxel specks (each meshes to an octahedron of 8 triangles).
+TriangleMesh ballsAndSpecks(int n, const std::vector<std::pair<int, double>>& balls,
+                            const std::vector<int>& specks) {
   static std::vector<uint8_t> data;
   data.assign(size_t(n) * n * n, 0);
   for (int z = 0; z < n; ++z)
     for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x) {
-        const double d = std::sqrt(double((x - 10) * (x - 10) + (y - 10) * (y - 10) + (z - 10) * (z - 10)));
-        data[x + n * (y + size_t(n) * z)] = d < 6.0 ? 255 : 0;
-      }
-  data[25 + n * (25 + size_t(n) * 25)] = 255;  // the speck: one voxel, 8 triangles
+      for (int x = 0; x < n; ++x)
+        for (const auto& [c, r] : balls)
+          if (std::sqrt(double((x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c))) < r)
+            data[x + n * (y + size_t(n) * z)] = 255;
+  for (int v : specks) data[v + n * (v + size_t(n) * v)] = 255;
   ProbabilityGridView g;
   g.data = data.data();
   g.dims = Eigen::Vector3i(n, n, n);
   g.voxel_size = 0.01;
   return marchingCubes(g);
 }
+
+// A ball of radius 6 voxels at voxel 10 and a speck at voxel 25.
+TriangleMesh ballAndSpeck(int n) { return ballsAndSpecks(n, {{10, 6.0}}, {25}); }
 
 TEST(MeshComponents, CountsAndRemovesSpecks) {
   TriangleMesh m = ballAndSpeck(30);
@@ -49,25 +56,9 @@ TEST(MeshComponents, CountsAndRemovesSpecks) {
   EXPECT_EQ(removeSmallComponents(&empty, 64), 0u);
 }
 
-// Two balls of radius 4 voxels (1 cm voxels) centred at voxels (8, 8, 8) and (22, 22, 22), i.e.
-// at 0.085 m and 0.225 m on each axis, their surfaces 0.16 m apart.
-TriangleMesh twoBalls() {
-  static std::vector<uint8_t> data;
-  const int n = 30;
-  data.assign(size_t(n) * n * n, 0);
-  for (int z = 0; z < n; ++z)
-    for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x)
-        for (int c : {8, 22}) {
-          const double d = std::sqrt(double((x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c)));
-          if (d < 4.0) data[x + n * (y + size_t(n) * z)] = 255;
-        }
-  ProbabilityGridView g;
-  g.data = data.data();
-  g.dims = Eigen::Vector3i(n, n, n);
-  g.voxel_size = 0.01;
-  return marchingCubes(g);
-}
+// Two balls of radius 4 voxels centred at voxels (8, 8, 8) and (22, 22, 22), i.e. at 0.085 m
+// and 0.225 m on each axis, their surfaces 0.16 m apart.
+TriangleMesh twoBalls() { return ballsAndSpecks(30, {{8, 4.0}, {22, 4.0}}, {}); }
 
 size_t verticesNear(const TriangleMesh& m, const Eigen::Vector3f& c, float r) {
   size_t k = 0;

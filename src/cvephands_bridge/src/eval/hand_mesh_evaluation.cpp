@@ -107,7 +107,7 @@ HandMeshSample HandMeshScorer::score(const psfs::ProbabilityVolume& vol,
   s.side = side;
   TriangleMesh pm, bm;
   auto t0 = std::chrono::steady_clock::now();
-  const Eigen::Vector3f centre = (0.5 * (vol.grid.origin + vol.grid.maxCorner())).cast<float>();
+  const Eigen::Vector3f centre = g.boxCentre().cast<float>();
   const float keep_radius = float(o.keep_radius);
   probabilistic_.extract(g, &pm);
   keepHandComponents(&pm, centre, min_triangles, keep_radius);

@@ -110,9 +110,8 @@ class HandMesherNodelet : public nodelet::Nodelet {
         const ProbabilityGridView grid = gridView(msg->volumes[i]);
         const ros::WallTime t0 = ros::WallTime::now();
         mc_->extract(grid, &mesh_);
-        const Eigen::Vector3d centre = grid.origin + 0.5 * grid.voxel_size * grid.dims.cast<double>();
-        keepHandComponents(&mesh_, centre.cast<float>(), size_t(std::max(0, min_component_triangles_)),
-                           keep_radius_);
+        keepHandComponents(&mesh_, grid.boxCentre().cast<float>(),
+                           size_t(std::max(0, min_component_triangles_)), keep_radius_);
         mesh_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
       } catch (const std::exception& e) {
         ++rejected_;

@@ -37,6 +37,8 @@ struct ProbabilityGridView {
   Eigen::Vector3d centre(int x, int y, int z) const {
     return origin + voxel_size * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
   }
+  // The centre of the whole box (a hand sub-volume's: the hand it was cut around).
+  Eigen::Vector3d boxCentre() const { return origin + 0.5 * voxel_size * dims.cast<double>(); }
 
   // Throws std::invalid_argument (the message names the field) for negative dims, a null data
   // pointer with nonzero dims, a non-finite origin or a voxel size that is not finite and > 0.
