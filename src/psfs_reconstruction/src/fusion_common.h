@@ -53,13 +53,15 @@ inline void checkFootprint(const ProjectionTable& table, const ViewEvidence& evi
 // The rows of a grid in parallel, dynamic chunks of `chunk` rows: fn(row, centres) with the
 // row's ProjectionTable::rowCentres (a per-thread scratch when the table projects on the fly).
 template <class Fn>
-void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& fn) {
+void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& fn,
+                size_t first_row = 0) {
   const long long rows = static_cast<long long>(table.grid().numRows());
 #pragma omp parallel num_threads(resolveThreads(threads))
   {
     std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
 #pragma omp for schedule(dynamic, chunk)
-    for (long long r = 0; r < rows; ++r) fn(size_t(r), table.rowCentres(size_t(r), cs.data()));
+    for (long long r = static_cast<long long>(first_row); r < rows; ++r)
+      fn(size_t(r), table.rowCentres(size_t(r), cs.data()));
   }
 }
 

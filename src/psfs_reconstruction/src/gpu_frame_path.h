@@ -21,7 +21,9 @@ namespace psfs {
 class GpuFramePath {
  public:
   // Throws std::runtime_error (with the reason) when the device or a part of the backend is
-  // not usable, std::invalid_argument like the CPU classes for bad parameters.
+  // not usable, std::invalid_argument like the CPU classes for bad parameters. params.body,
+  // .skin and .hand are the fusion options as the CPU path runs them (the Reconstructor sets
+  // the hand's floor_z); so are setFusion's.
   GpuFramePath(const GaussianMixture2D& skin, const ReconstructorParams& params);
 
   void setPriors(const ClassPriors& priors) { pixels_.setPriors(priors); }

@@ -11,13 +11,18 @@ size_t countAbove(const ProbabilityVolume& v, uint8_t t) {
   return n;
 }
 
+int layersBelow(const VoxelGrid& g, double z) {
+  int layers = 0;
+  while (layers < g.dims.z() && g.centre(0, 0, layers).z() < z) ++layers;
+  return layers;
+}
+
 int clearBelow(double z, ProbabilityVolume* v) {
   const VoxelGrid& g = v->grid;
   if (v->data.size() != g.numVoxels())
     throw std::invalid_argument("psfs::clearBelow: data does not match the grid");
   const size_t layer = size_t(g.dims.x()) * size_t(g.dims.y());
-  int layers = 0;
-  while (layers < g.dims.z() && g.centre(0, 0, layers).z() < z) ++layers;
+  const int layers = layersBelow(g, z);
   std::fill(v->data.begin(), v->data.begin() + long(layer * size_t(layers)), uint8_t(0));
   return layers;
 }

@@ -1,6 +1,8 @@
 #include "psfs_reconstruction/psfs_fusion.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -55,6 +57,7 @@ PsfsRowParams psfsRowParams(const PsfsOptions& o, const ProjectionTable& table) 
   p.exp_scale = kExpScale;
   p.t_byte = thresholdByte(o.threshold);
   p.zero_outside = o.zero_outside_hull;
+  p.first_layer = layersBelow(table.grid(), o.floor_z);
   return p;
 }
 
@@ -89,6 +92,8 @@ PsfsFusion::PsfsFusion(const PsfsOptions& o) : options_(o) {
   if (o.threads < 0) throw std::invalid_argument("psfs::PsfsOptions: threads must be >= 0");
   if (o.footprint && o.multi_projection)
     throw std::invalid_argument("psfs::PsfsOptions: footprint and multi_projection are exclusive");
+  if (std::isnan(o.floor_z) || o.floor_z == std::numeric_limits<double>::infinity())
+    throw std::invalid_argument("psfs::PsfsOptions: floor_z must be a height or -infinity");
 }
 
 void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence,
@@ -111,12 +116,16 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
                                uint16_t* yface, uint16_t* zface) {
                              face_fn(p, centres, offsets, yface, zface, dst + r * p.nx);
                            });
+    clearBelow(options_.floor_z, out);  // the faces are shared along z: computed, then cleared
     return;
   }
+  // The layers below the floor are 0 and never projected.
+  const size_t first_row = size_t(p.first_layer) * size_t(out->grid.dims.y());
+  std::fill(dst, dst + first_row * size_t(p.nx), uint8_t(0));
   const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
-  detail::forEachRow(table, options_.threads, 8, [&](size_t r, const uint32_t* centres) {
-    row_fn(p, centres, dst + r * p.nx);
-  });
+  detail::forEachRow(
+      table, options_.threads, 8,
+      [&](size_t r, const uint32_t* centres) { row_fn(p, centres, dst + r * p.nx); }, first_row);
 }
 
 }  // namespace psfs

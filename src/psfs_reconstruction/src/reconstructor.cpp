@@ -36,6 +36,16 @@ std::string percent(double fraction) {
   return buf;
 }
 
+// The hand sub-volumes' fusion options: nothing below the workspace's floor (the desk top) when
+// hand_roi_clip_floor is set (or below the options' own floor, if higher); over the desk no
+// camera sees there, and without the floor the voxels under a hand resting on it take the
+// hand's evidence. The CPU fusion, the GPU frame path and live tuning all take these.
+PsfsOptions handFusionOptions(const ReconstructorParams& params, PsfsOptions hand) {
+  if (params.hand_roi_clip_floor)
+    hand.floor_z = std::max(hand.floor_z, params.workspace.min_corner.z());
+  return hand;
+}
+
 }  // namespace
 
 void ReconstructorParams::validate() const {
@@ -74,7 +84,7 @@ Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const Reconstr
       clothing_(params.clothing),
       body_fusion_(params.body),
       skin_fusion_(params.skin),
-      hand_fusion_(params.hand) {
+      hand_fusion_(handFusionOptions(params, params.hand)) {
   // Background parameters are checked by constructing a model with them.
   BackgroundModel probe(1, 1, params.background);
   (void)probe;
@@ -84,7 +94,9 @@ Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const Reconstr
       backend_warning_ = "backend cuda: " + d.describe() + "; running on the CPU";
     } else {
       try {
-        gpu_ = std::make_unique<GpuFramePath>(skin_model, params);
+        ReconstructorParams device_params = params;
+        device_params.hand = handFusionOptions(params, params.hand);
+        gpu_ = std::make_unique<GpuFramePath>(skin_model, device_params);
         active_backend_ = ReconstructorParams::Backend::kCuda;
       } catch (const std::runtime_error& e) {
         backend_warning_ = std::string("backend cuda: ") + e.what() + "; running on the CPU";
@@ -113,11 +125,11 @@ void Reconstructor::setFusionThresholds(double body, double skin, double hand) {
   b.threshold = body;
   s.threshold = skin;
   h.threshold = hand;
-  PsfsFusion fb(b), fs(s), fh(h);  // each checks its options before anything changes
+  PsfsFusion fb(b), fs(s), fh(handFusionOptions(params_, h));  // each checks its options first
   body_fusion_ = fb;
   skin_fusion_ = fs;
   hand_fusion_ = fh;
-  if (gpu_) gpu_->setFusion(b, s, h);
+  if (gpu_) gpu_->setFusion(b, s, fh.options());
   params_.body = b;
   params_.skin = s;
   params_.hand = h;
@@ -509,7 +521,6 @@ void Reconstructor::reconstruct(const std::vector<cv::Mat>& rgb,
       gpu_->fuseHand(*hand_tables_[h], &r.hands[h]);
     else
       hand_fusion_.fuse(*hand_tables_[h], skin_evidence_, &r.hands[h]);
-    if (params_.hand_roi_clip_floor) clearBelow(params_.workspace.min_corner.z(), &r.hands[h]);
   }
   r.times.hands = msSince(t0);
 

@@ -53,6 +53,7 @@ struct PsfsRowParams {
   float exp_scale = 0.0f;
   int32_t t_byte = 0;
   bool zero_outside = false;
+  int first_layer = 0;           // z layers below it are 0 and not computed (PsfsOptions::floor_z)
 };
 
 // ---- small helpers device code has no std:: for --------------------------------------------
@@ -241,6 +242,7 @@ struct TableView {
 // multi-projection test (the table has offsets, the views pairs).
 template <int K>
 PSFS_HD uint8_t fuseVoxel(const PsfsRowParams& p, const TableView& t, bool multi, int x, int y, int z) {
+  if (z < p.first_layer) return 0;  // below the floor (each thread reads its faces itself)
   const size_t C = static_cast<size_t>(p.num_cameras);
   const size_t row = static_cast<size_t>(y) + static_cast<size_t>(t.ny) * static_cast<size_t>(z);
   TermFusion<K> f;

@@ -3,7 +3,8 @@
 // 1 skin), and the fusion cases the GPU path must reproduce byte for byte: the 64x64x48
 // tracking volume with and without the multi-projection test, a 83^3 hand sub-volume projected
 // on the fly, a grid partly outside some views (one camera zoomed in, a grid larger than the
-// user space), switched-off pixels, footprint levels, and occluded_views 0..2.
+// user space), switched-off pixels, footprint levels, a floor (PsfsOptions::floor_z), and
+// occluded_views 0..2.
 #pragma once
 
 #include <memory>
@@ -133,6 +134,18 @@ inline std::vector<FusionCase> fusionCases(const SimScene& s) {
   cases.push_back({"64x64x48 multi-projection body k1, inactive pixels", tracking, opts(true, 1),
                    TableStorage::kAuto, 0, true});
   cases.push_back({"hand 83^3 on the fly, single skin k1", hand, opts(false, 1), TableStorage::kOnTheFly, 1});
+  {
+    PsfsOptions o = opts(false, 1);
+    o.floor_z = s.right_hand.z();  // PsfsOptions::floor_z (the desk top): half the cube cleared
+    cases.push_back({"hand 83^3 on the fly, single skin k1, floor through the hand", hand, o,
+                     TableStorage::kOnTheFly, 1});
+  }
+  {
+    PsfsOptions o = opts(true, 0);
+    o.floor_z = s.right_hand.z();  // the device skips these threads, the CPU clears them
+    cases.push_back({"hand 83^3 on the fly, multi-projection body k0, floor through the hand", hand,
+                     o, TableStorage::kOnTheFly, 0});
+  }
   cases.push_back({"hand 83^3 on the fly, multi-projection body k0", hand, opts(true, 0), TableStorage::kOnTheFly, 0});
   cases.push_back({"40^3 beyond the views, camera 1 zoomed, multi-projection k0, inactive", wide, opts(true, 0),
                    TableStorage::kPrecomputed, 0, true, true});

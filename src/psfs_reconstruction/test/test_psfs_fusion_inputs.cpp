@@ -234,6 +234,11 @@ TEST(PsfsFusion, BadInputsGiveClearErrors) {
   EXPECT_THROW(PsfsFusion(mo).fuse(table, ev, &out), std::invalid_argument);  // table lacks it
 
   PsfsOptions o;
+  o.floor_z = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(PsfsFusion{o}, std::invalid_argument);
+  o.floor_z = std::numeric_limits<double>::infinity();  // nothing would be left
+  EXPECT_THROW(PsfsFusion{o}, std::invalid_argument);
+  o = PsfsOptions();
   o.threshold = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(PsfsFusion{o}, std::invalid_argument);
   o.threshold = 0.4;
@@ -255,4 +260,49 @@ TEST(PsfsFusion, BadInputsGiveClearErrors) {
 }
 
 }  // namespace
+}  // namespace psfs
+
+namespace psfs {
+namespace fusion_test {
+namespace {
+
+// PsfsOptions::floor_z (the hand sub-volumes' desk top): the layers below it are 0 and the
+// others are what fusing everything gives, to the byte, whether the layers are skipped (single
+// projection, a stored or an on-the-fly table) or computed and cleared (multi-projection), and
+// whatever the output buffer held before.
+TEST(PsfsFusion, FloorLayersAreZeroAndTheRestUnchanged) {
+  const Scene s = ringScene(6);
+  const VoxelGrid g = sphereGrid(40);  // z from 0.15 to 0.45 m; the sphere 0.2 to 0.4 m
+  const double floor = 0.27;            // through the sphere, 16 of 40 layers below
+  const int below = layersBelow(g, floor);
+  ASSERT_EQ(below, 16);
+  for (const bool multi : {false, true})
+    for (const TableStorage storage : {TableStorage::kAuto, TableStorage::kOnTheFly}) {
+      PsfsOptions o;
+      o.multi_projection = multi;
+      ProbabilityVolume all = fusePsfs(g, s.cams, test::toViews(s.images), o, storage);
+      ASSERT_GT(countAbove(all, thresholdByte(0.5)), 0u);
+      ProjectionTableOptions to;
+      to.multi_projection = multi;
+      to.storage = storage;
+      const ProjectionTable table(g, s.cams, to);
+      ViewEvidence ev;
+      ev.set(test::toViews(s.images), multi);
+      o.floor_z = floor;
+      ProbabilityVolume floored;
+      floored.grid = g;
+      floored.data.assign(g.numVoxels(), 255);  // a stale buffer
+      PsfsFusion(o).fuse(table, ev, &floored);
+      size_t cleared_in_hull = 0;
+      const size_t layer = size_t(g.dims.x()) * size_t(g.dims.y());
+      for (size_t i = 0; i < below * layer; ++i) cleared_in_hull += all.data[i] > thresholdByte(0.5);
+      EXPECT_GT(cleared_in_hull, 0u) << "the floor cuts through the sphere";
+      EXPECT_EQ(clearBelow(floor, &all), below);
+      EXPECT_TRUE(floored.data == all.data) << (multi ? "multi-projection" : "single projection")
+                                            << (storage == TableStorage::kOnTheFly ? ", on the fly" : "");
+    }
+}
+
+}  // namespace
+}  // namespace fusion_test
 }  // namespace psfs

@@ -476,6 +476,17 @@ TEST_F(ReconstructorTest, HandSubVolumesHoldNothingBelowTheDesk) {
       EXPECT_EQ(below, 0u);
     }
   }
+  // The floor stays when the thresholds are tuned live (setFusionThresholds rebuilds the hand
+  // fusion): the resting hand's cube is still empty below the desk.
+  clipped.setFusionThresholds(params_.body.threshold, params_.skin.threshold, 0.7);
+  const FrameResult c = clipped.process(rig_->render(f + 1).images, cameras(), rois);
+  ASSERT_EQ(c.hands.size(), 2u);
+  size_t nonzero_below = 0, voxels_below = 0;
+  const ProbabilityVolume& resting = c.hands[1];
+  for (size_t i = 0; i < resting.data.size(); ++i)
+    if (resting.grid.centre(i).z() < floor_z) ++voxels_below, nonzero_below += resting.data[i] != 0;
+  EXPECT_GT(voxels_below, 0u);
+  EXPECT_EQ(nonzero_below, 0u);
 }
 
 TEST(ProbabilityVolume, ClearBelowZeroesTheLayersUnderAHeight) {

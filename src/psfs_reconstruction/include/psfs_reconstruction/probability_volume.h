@@ -28,6 +28,9 @@ inline uint8_t thresholdByte(double t) {
 // Number of voxels with value > threshold_byte.
 size_t countAbove(const ProbabilityVolume& v, uint8_t threshold_byte);
 
+// Number of z layers of the grid whose centre lies below height z (world).
+int layersBelow(const VoxelGrid& g, double z);
+
 // Sets every voxel whose centre lies below height z (world) to 0; returns the number of z
 // layers cleared. Throws std::invalid_argument if the data does not match the grid.
 int clearBelow(double z, ProbabilityVolume* v);

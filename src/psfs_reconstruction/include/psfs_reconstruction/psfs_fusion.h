@@ -54,6 +54,8 @@
 //               skin_fusion.fuse(hand_table, skin /* channel 1 */, &hand_volume);
 #pragma once
 
+#include <limits>
+
 #include "psfs_reconstruction/probability_volume.h"
 #include "psfs_reconstruction/projection_table.h"
 #include "psfs_reconstruction/view_evidence.h"
@@ -92,6 +94,14 @@ struct PsfsOptions {
   // evidence set with a FootprintFilter of at least as many levels.
   bool footprint = false;
   bool zero_outside_hull = false;  // store 0 instead of the posterior where p <= t
+  // Voxels whose centre lies below this height (world z, m) are 0 and not computed. The hand
+  // sub-volumes use it for the desk top, which no camera sees below
+  // (ReconstructorParams::hand_roi_clip_floor); a hand resting on the desk has 40 % of its
+  // cube below it. -infinity: none. On the CPU the single-projection (and footprint) fusion
+  // skips those layers, projection included; the multi-projection kernel computes and clears
+  // them (it carries the faces from layer to layer). On a GPU no thread below fuses, but an
+  // on-the-fly table is still projected whole.
+  double floor_z = -std::numeric_limits<double>::infinity();
   int threads = 0;                 // OpenMP threads (0 = OpenMP default)
 };
 

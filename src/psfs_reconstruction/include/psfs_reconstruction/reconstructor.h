@@ -81,7 +81,8 @@ struct ReconstructorParams {
   // Hand sub-volumes hold nothing below the workspace's floor (workspace.min_corner z, the desk
   // top in DESIGN's world frame). A hand on the desk puts half its cube under the desk top;
   // over the desk those voxels are hidden from every camera, project onto the hand above them
-  // in all of them and fill with its evidence: a slab of phantom skin under the hand.
+  // in all of them and fill with its evidence: a slab of phantom skin under the hand. The hand
+  // fusion skips those layers (PsfsOptions::floor_z).
   bool hand_roi_clip_floor = true;
   // Selective background update after each reconstructed frame (alpha in `background`).
   bool update_background = true;
