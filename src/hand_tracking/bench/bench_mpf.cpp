@@ -63,11 +63,9 @@ MpfParams paramsFor(int total, int threads) {
   return p;
 }
 
-// Arguments: total particles (head 20 %, each hand 40 %, the thesis' 200/400/400 ratio),
-// OpenMP threads.
-void BM_MpfUpdate(benchmark::State& st) {
-  const Frames& f = frames();
-  MpfTracker tracker(paramsFor(static_cast<int>(st.range(0)), static_cast<int>(st.range(1))), 1);
+// Full updates on `f`'s frames, after one warm-up pass, with the stages' times as counters.
+void runUpdates(benchmark::State& st, const Frames& f, int particles, int threads) {
+  MpfTracker tracker(paramsFor(particles, threads), 1);
   const size_t n = f.skin.size();
   for (size_t i = 0; i < n; ++i) tracker.update(f.skin[i], f.body[i], 0.04);  // warm-up
   size_t i = 0;
@@ -88,6 +86,12 @@ void BM_MpfUpdate(benchmark::State& st) {
   st.counters["targets"] = active / i;
   st.counters["particles"] = static_cast<double>(tracker.particles().size());
 }
+
+// Arguments: total particles (head 20 %, each hand 40 %, the thesis' 200/400/400 ratio),
+// OpenMP threads.
+void BM_MpfUpdate(benchmark::State& st) {
+  runUpdates(st, frames(), static_cast<int>(st.range(0)), static_cast<int>(st.range(1)));
+}
 BENCHMARK(BM_MpfUpdate)
     ->ArgNames({"particles", "threads"})
     ->Args({1000, 2})
@@ -101,20 +105,7 @@ BENCHMARK(BM_MpfUpdate)
     ->UseRealTime();
 
 // Bare forearms (1000 particles, 2 threads): the hands' ends found along the skin.
-void BM_MpfUpdateBareArms(benchmark::State& st) {
-  const Frames& f = bareArmFrames();
-  MpfTracker tracker(paramsFor(1000, 2), 1);
-  const size_t n = f.skin.size();
-  for (size_t i = 0; i < n; ++i) tracker.update(f.skin[i], f.body[i], 0.04);  // warm-up
-  size_t i = 0;
-  double reconfigure = 0;
-  for (auto _ : st) {
-    benchmark::DoNotOptimize(tracker.update(f.skin[i % n], f.body[i % n], 0.04).data());
-    reconfigure += tracker.lastTimes().reconfigure_ms;
-    ++i;
-  }
-  st.counters["reconf_ms"] = reconfigure / i;
-}
+void BM_MpfUpdateBareArms(benchmark::State& st) { runUpdates(st, bareArmFrames(), 1000, 2); }
 BENCHMARK(BM_MpfUpdateBareArms)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The thesis' observation: voxel-centre box means (8 reads per box) instead of the smooth ones.
