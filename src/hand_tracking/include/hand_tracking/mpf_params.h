@@ -81,10 +81,15 @@ struct MpfParams {
   // ~0.55-0.65 on the default scenario but 0.3-0.45 where hair, dark skin or a coloured light
   // leave less of the head box skin: at 0.45 the head of random-10 (orange light) was never
   // found over its whole script and a hand track took its face, and four of random-25..48
-  // never had a head. The birth rule below (the head starts near the top of the body) keeps
-  // the lower threshold off chests and arms; the volume-size check (no hand birth where a
-  // head would be) uses it too.
-  double head_init_weight = 0.35;  // observation (0..1)
+  // never had a head. Long hair over the sides and back leaves the face alone skin: 0.29-0.30
+  // at the true head of random-20 and random-49 (auburn long hair) and 0.29 on random-44, the
+  // best spot a few cm lower 0.32-0.36; at 0.35 none of them ever had a head, and a hand track
+  // took the face. 0.28 found all three and changed nothing else on 72 scenarios
+  // (docs/benchmarks.md). A hand or forearm fills under a tenth of a head box.
+  // The birth rule below (the head starts near the top of the body) keeps the lower threshold
+  // off chests and arms; the volume-size check (no hand birth where a head would be) uses it
+  // too.
+  double head_init_weight = 0.28;  // observation (0..1)
   // The head track starts only within head_birth_depth (m) below the top of the body (the
   // highest level of the body volume with head_birth_top_area (m^2) occupied, body_top.h),
   // not on a skin-coloured chest whose head box outscores the head's (hair is not skin). The
