@@ -13,6 +13,7 @@
 
 #include "psfs_reconstruction/background_model.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
+#include "psfs_reconstruction/image_prefilter.h"
 #include "psfs_reconstruction/pixel_classifier.h"
 #include "../test/synthetic_scene.h"
 
@@ -124,6 +125,23 @@ void BM_BackgroundUpdate8(benchmark::State& state) {
   setCounters(state);
 }
 BENCHMARK(BM_BackgroundUpdate8)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// The noise filter the Reconstructor runs on the 8 images before classifying them
+// (image_prefilter.h); BM_Classify8 is the same-run baseline it adds to. Arg: threads.
+void prefilter8(benchmark::State& state, psfs::ImagePrefilter type) {
+  Rig& r = rig();
+  const int threads = int(state.range(0));
+  std::vector<cv::Mat> out;
+  for (auto _ : state) {
+    psfs::prefilterImages(r.frames, psfs::ImagePrefilterParams{type, 3}, &out, threads);
+    benchmark::DoNotOptimize(out.data());
+  }
+  setCounters(state);
+}
+void BM_PrefilterMedian3(benchmark::State& state) { prefilter8(state, psfs::ImagePrefilter::kMedian); }
+BENCHMARK(BM_PrefilterMedian3)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+void BM_PrefilterBox3(benchmark::State& state) { prefilter8(state, psfs::ImagePrefilter::kBox); }
+BENCHMARK(BM_PrefilterBox3)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -76,6 +76,7 @@ void ReconstructorParams::validate() const {
       fail("footprint levels must lie in [2, 3]");
   if (!(footprint_scale > 0 && std::isfinite(footprint_scale))) fail("footprint_scale must be > 0");
   clothing.validate();
+  prefilter.validate();
 }
 
 Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const ReconstructorParams& params)
@@ -425,16 +426,23 @@ double Reconstructor::occupiedLitresAgainstPrevious(const std::vector<cv::Mat>& 
   return occupied * edge * edge * edge * 1e3;
 }
 
-FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb,
+FrameResult Reconstructor::process(const std::vector<cv::Mat>& rgb_in,
                                    const std::vector<tabletop_capture::CameraModel>& cameras,
                                    const std::vector<Eigen::Vector3d>& hand_rois,
                                    const std::vector<cv::Mat>& foreground_masks) {
   const auto t_start = Clock::now();
-  validateFrame(rgb, cameras);
+  validateFrame(rgb_in, cameras);
   for (const auto& c : hand_rois)
     if (!c.allFinite()) throw std::invalid_argument("hand ROI centre is not finite");
+  // Every image through the noise filter first: learning, classification, the update and the
+  // clothing colour all see the filtered pixels (image_prefilter.h).
+  const bool filter = params_.prefilter.type != ImagePrefilter::kNone;
+  const auto t_filter = Clock::now();
+  if (filter) prefilterImages(rgb_in, params_.prefilter, &filtered_, params_.threads);
+  const std::vector<cv::Mat>& rgb = filter ? filtered_ : rgb_in;
 
   FrameResult r;
+  r.times.prefilter = msSince(t_filter);
   if (!backend_warning_.empty()) {  // once: the nodelet logs it
     r.warnings.push_back(backend_warning_);
     backend_warning_.clear();

@@ -24,6 +24,8 @@ std::string directoryOf(const std::string& path) {
 
 void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema* s) {
   ReconstructorParams& p = c->params;
+  s->add("pixel_classifier/prefilter", &c->prefilter_name)
+      .add("pixel_classifier/prefilter_size", &p.prefilter.size);
   s->add("pixel_classifier/skin_model", &c->skin_model_path)
       .add("pixel_classifier/foreground_outlier", &p.classifier.foreground_outlier)
       .add("pixel_classifier/skin_outlier", &p.classifier.skin_outlier)
@@ -102,6 +104,11 @@ void finishReconstructorConfig(const std::string& path, ReconstructorConfig* cfg
   ReconstructorConfig& c = *cfg;
   ReconstructorParams& p = c.params;
   const std::string where = path + ": ";
+  try {
+    p.prefilter.type = parseImagePrefilter(c.prefilter_name);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(where + "pixel_classifier/prefilter: " + e.what());
+  }
   // The structs check their own ranges; report those against the file too.
   try {
     p.validate();

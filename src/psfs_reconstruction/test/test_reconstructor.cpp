@@ -489,6 +489,42 @@ TEST_F(ReconstructorTest, HandSubVolumesHoldNothingBelowTheDesk) {
   EXPECT_EQ(nonzero_below, 0u);
 }
 
+// The prefilter (image_prefilter.h) acts on every stage alike: a Reconstructor that filters
+// gives, set for set, the volumes, likelihoods and clothing colour of one that does not but is
+// fed the filtered images, through learning, reconstruction and a set without one camera.
+TEST_F(ReconstructorTest, ThePrefilterFeedsEveryStage) {
+  ReconstructorParams median = params_;
+  median.prefilter = {ImagePrefilter::kMedian, 3};
+  ReconstructorParams none = params_;
+  none.prefilter = {ImagePrefilter::kNone, 3};
+  Reconstructor a(skin(), median), b(skin(), none);
+  size_t differing = 0;
+  for (int f = 0; f < kLearn + 6; ++f) {
+    std::vector<cv::Mat> raw = rig_->render(f).images, filtered;
+    if (f == kLearn + 4) raw[3] = cv::Mat();  // camera 3 missing from this set
+    prefilterImages(raw, median.prefilter, &filtered);
+    const FrameResult ra = a.process(raw, cameras()), rb = b.process(filtered, cameras());
+    ASSERT_EQ(ra.status, rb.status) << "set " << f;
+    if (ra.status != FrameResult::Status::kReconstructed) continue;
+    EXPECT_EQ(ra.body.data, rb.body.data) << "set " << f;
+    EXPECT_EQ(ra.skin.data, rb.skin.data) << "set " << f;
+    for (size_t c = 0; c < a.lastLikelihoods().size(); ++c) {
+      if (a.lastLikelihoods()[c].empty()) continue;
+      EXPECT_EQ(cv::norm(a.lastLikelihoods()[c], b.lastLikelihoods()[c], cv::NORM_INF), 0.0);
+    }
+    EXPECT_EQ(a.clothingColour().valid(), b.clothingColour().valid());
+    // Against raw pixels the likelihoods do differ (the filter is not a no-op here).
+    if (f == kLearn + 5) {
+      Reconstructor c(skin(), none);
+      for (int g = 0; g <= f; ++g) c.process(rig_->render(g).images, cameras());
+      for (size_t i = 0; i < c.lastLikelihoods().size(); ++i)
+        differing += cv::countNonZero(c.lastLikelihoods()[i].reshape(1) !=
+                                      a.lastLikelihoods()[i].reshape(1));
+    }
+  }
+  EXPECT_GT(differing, 1000u);
+}
+
 TEST(ProbabilityVolume, ClearBelowZeroesTheLayersUnderAHeight) {
   ProbabilityVolume v;
   v.grid.origin = Eigen::Vector3d(0, 0, -0.1);
@@ -550,6 +586,9 @@ TEST(ReconstructorConfig, ShippedFileMatchesTheDefaults) {
   EXPECT_EQ(c.params.background.min_learning_frames, d.background.min_learning_frames);
   EXPECT_EQ(c.params.learning_max_occupied_litres, d.learning_max_occupied_litres);
   EXPECT_EQ(c.params.classifier.shadow_chroma_radius, d.classifier.shadow_chroma_radius);
+  EXPECT_EQ(c.params.prefilter.type, d.prefilter.type);
+  EXPECT_EQ(c.params.prefilter.size, d.prefilter.size);
+  EXPECT_EQ(c.prefilter_name, imagePrefilterName(d.prefilter.type));
   const ClothingColourParams& cc = c.params.clothing;
   const ClothingColourParams& dc = d.clothing;
   EXPECT_EQ(cc.enabled, dc.enabled);
@@ -611,9 +650,18 @@ TEST(ReconstructorConfig, BadFilesNameTheFileAndTheKey) {
   expectError("nodelet: {threads: many}", "nodelet/threads: wrong type");
   expectError("hand_volumes: {max_age: 0}", "hand_volumes/max_age");
   expectError("compute: {backend: opencl}", "compute/backend: 'opencl' is not cpu or cuda");
+  expectError("pixel_classifier: {prefilter: gaussian}",
+              "pixel_classifier/prefilter: 'gaussian' is not none, median or box");
+  expectError("pixel_classifier: {prefilter: median, prefilter_size: 4}",
+              "prefilter_size must be 3, 5 or 7");
   expectError("[1, 2", "cannot read");
   std::ofstream(path) << "volume: {dims: [128, 128, 96]}\n";
   EXPECT_EQ(loadReconstructorConfig(path).params.dims, Eigen::Vector3i(128, 128, 96));
+  std::ofstream(path) << "pixel_classifier: {prefilter: none, prefilter_size: 4}\n";  // unused
+  EXPECT_EQ(loadReconstructorConfig(path).params.prefilter.type, ImagePrefilter::kNone);
+  std::ofstream(path) << "pixel_classifier: {prefilter: median, prefilter_size: 5}\n";
+  EXPECT_EQ(loadReconstructorConfig(path).params.prefilter.type, ImagePrefilter::kMedian);
+  EXPECT_EQ(loadReconstructorConfig(path).params.prefilter.size, 5);
   fs::remove(path);
   psfs_test::expectThrowContaining<std::runtime_error>([&] { loadReconstructorConfig(path); }, path);
 }

@@ -1,7 +1,8 @@
 // One frame set in, the pSfS volumes out: the whole per-frame pipeline of thesis chapter 4 as a
 // ROS-free object (the nodelet is a thin wrapper around it, tests drive it directly).
 //
-//   background learning (first learning_frames sets, or a loaded model; a set that shows a
+//   optional noise filter on every image (image_prefilter.h; all the stages below see it)
+//   -> background learning (first learning_frames sets, or a loaded model; a set that shows a
 //   change against the sets learned so far, e.g. a person sitting down, is not learned)
 //   -> pixel classification (P'(F|c), P'(F,S|c) per camera, one pass)
 //   -> view evidence (log terms, bilinear pairs) for the body and the skin class
@@ -30,6 +31,7 @@
 #include "psfs_reconstruction/background_model.h"
 #include "psfs_reconstruction/clothing_colour.h"
 #include "psfs_reconstruction/gaussian_mixture.h"
+#include "psfs_reconstruction/image_prefilter.h"
 #include "psfs_reconstruction/pixel_classifier.h"
 #include "psfs_reconstruction/probability_volume.h"
 #include "psfs_reconstruction/projection_table.h"
@@ -41,6 +43,8 @@
 namespace psfs {
 
 struct ReconstructorParams {
+  // The noise filter before the background model and the classifier (image_prefilter.h).
+  ImagePrefilterParams prefilter;
   PixelClassifierParams classifier;
   BackgroundModelParams background;
   // The person's clothing colour, learned from the trunk of each set's body volume, in the skin
@@ -130,6 +134,7 @@ struct ReconstructorParams {
 struct StageTimes {  // wall time per stage of the last frame (ms)
   double classify = 0, evidence = 0, body = 0, skin = 0, hands = 0, background = 0, total = 0;
   double clothing = 0;  // measuring the clothing colour (clothing_colour.h)
+  double prefilter = 0;  // the images' noise filter (image_prefilter.h)
 };
 
 struct FrameResult {
@@ -252,6 +257,7 @@ class Reconstructor {
   std::unique_ptr<ProjectionTable> table_;          // workspace grid (body and skin)
   std::vector<std::unique_ptr<ProjectionTable>> hand_tables_;
   std::vector<cv::Mat> likelihoods_;
+  std::vector<cv::Mat> filtered_;  // this set's images after the prefilter (reused buffers)
   ViewEvidence body_evidence_, skin_evidence_;
   int learning_skips_ = 0;  // changed learning sets in a row
   ReconstructorParams::Backend active_backend_ = ReconstructorParams::Backend::kCpu;

@@ -56,6 +56,8 @@ struct ReconstructorConfig {
   std::string skin_model_path = "skin_gmm.yaml";
   // compute/backend: "cpu" or "cuda" (ReconstructorParams::backend).
   std::string backend_name = "cpu";
+  // pixel_classifier/prefilter: "none", "median" or "box" (ReconstructorParams::prefilter).
+  std::string prefilter_name = "none";
   NodeletOptions nodelet;
 };
 
