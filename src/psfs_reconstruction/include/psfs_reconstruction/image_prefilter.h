@@ -8,8 +8,8 @@
 // desk (0.01-0.02). A 3x3 median over each channel cuts that noise by about 2.4 without moving
 // edges (a mean would smear a face's skin chroma a pixel into dark hair around it and grow the
 // skin hull), and a 15.6 mm voxel spans 3-8 pixels.
-// Off by default: measured on 72 generated scenarios (docs/benchmarks.md, "pSfS: a median
-// filter before the classifier, and the head's birth behind long hair"), a 3x3 median lowered
+// Off by default: measured on 72 generated scenarios (docs/benchmarks.md, "MPF: the head's
+// birth behind long hair; pSfS: a noise filter before the classifier"), a 3x3 median lowered
 // the MPF's hand error in every set of 24 (medians 30.7 / 59.3 / 35.3 -> 23.0 / 44.8 / 34.8
 // mm) and raised body IoU in two (0.506 / 0.499 -> 0.524 / 0.531), but the gain is on noisy
 // cameras: with sensor noise under ~1.75 levels it made 7 of 20 scenarios' hands worse and 2
