@@ -43,7 +43,7 @@ void prefilterImages(const std::vector<cv::Mat>& rgb, const ImagePrefilterParams
     for (int i = 0; i < n; ++i) (*out)[i] = rgb[i];
     return;
   }
-  // One image per thread (cv::medianBlur and cv::blur run single-threaded at these sizes).
+  // One image per thread (8 images of a set on 2 cores: no finer split needed).
   const int threads = num_threads > 0 ? num_threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic) num_threads(threads)
   for (int i = 0; i < n; ++i) {
