@@ -3,9 +3,9 @@
 #include <stdexcept>
 #include <string>
 
-#include <omp.h>
-
 #include <opencv2/imgproc.hpp>
+
+#include "cpu_dispatch.h"
 
 namespace psfs {
 
@@ -44,8 +44,7 @@ void prefilterImages(const std::vector<cv::Mat>& rgb, const ImagePrefilterParams
     return;
   }
   // One image per thread (8 images of a set on 2 cores: no finer split needed).
-  const int threads = num_threads > 0 ? num_threads : omp_get_max_threads();
-#pragma omp parallel for schedule(dynamic) num_threads(threads)
+#pragma omp parallel for schedule(dynamic) num_threads(resolveThreads(num_threads))
   for (int i = 0; i < n; ++i) {
     cv::Mat& dst = (*out)[i];
     // A buffer shared with anyone else (e.g. a header on a caller's image left by kNone) is

@@ -109,6 +109,9 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
   out->data.resize(table.grid().numVoxels());
   uint8_t* dst = out->data.data();
   const bool vector = vectorKernelsActive();
+  // The layers below the floor are 0. Single projection never projects their rows; the
+  // multi-projection kernel carries the faces along z, so it computes them and they are cleared.
+  const size_t first_row = size_t(p.first_layer) * size_t(out->grid.dims.y());
   if (options_.multi_projection) {
     const detail::PsfsFaceRowFn face_fn = detail::selectPsfsFaceRow(options_.occluded_views, vector);
     detail::forEachFaceRow(table, views, options_.threads,
@@ -116,16 +119,14 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
                                uint16_t* yface, uint16_t* zface) {
                              face_fn(p, centres, offsets, yface, zface, dst + r * p.nx);
                            });
-    clearBelow(options_.floor_z, out);  // the faces are shared along z: computed, then cleared
-    return;
+  } else {
+    const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
+    detail::forEachRow(
+        table, options_.threads, 8,
+        [&](size_t r, const uint32_t* centres) { row_fn(p, centres, dst + r * p.nx); },
+        first_row);
   }
-  // The layers below the floor are 0 and never projected.
-  const size_t first_row = size_t(p.first_layer) * size_t(out->grid.dims.y());
   std::fill(dst, dst + first_row * size_t(p.nx), uint8_t(0));
-  const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
-  detail::forEachRow(
-      table, options_.threads, 8,
-      [&](size_t r, const uint32_t* centres) { row_fn(p, centres, dst + r * p.nx); }, first_row);
 }
 
 }  // namespace psfs
