@@ -18,7 +18,9 @@ namespace psfs {
 namespace {
 
 constexpr char kMagic[8] = {'P', 'S', 'F', 'S', 'B', 'G', 'M', '1'};
-constexpr std::uint32_t kFormatVersion = 1;
+constexpr std::uint32_t kFormatVersion = 2;
+constexpr std::uint32_t kFormatVersionWithoutFilter = 1;
+constexpr std::size_t kFilterField = 16;  // bytes of the image filter's name (v2), NUL-padded
 constexpr double kPi = 3.14159265358979323846;
 
 struct FileHeader {
@@ -41,6 +43,11 @@ void validateParams(const BackgroundModelParams& p) {
     throw std::invalid_argument("background model: learning_frames must be >= 2");
   if (!(p.learning_rate >= 0.0f && p.learning_rate <= 1.0f))
     throw std::invalid_argument("background model: learning_rate must be in [0, 1]");
+  if (p.image_filter.empty() || p.image_filter.size() >= kFilterField ||
+      !std::all_of(p.image_filter.begin(), p.image_filter.end(),
+                   [](char c) { return c >= 0x20 && c < 0x7f; }))
+    throw std::invalid_argument("background model: image_filter must be 1-" +
+                                std::to_string(kFilterField - 1) + " printable characters");
   if (!(p.min_sigma_rg > 0.0f && std::isfinite(p.min_sigma_rg)))
     throw std::invalid_argument("background model: min_sigma_rg must be > 0");
   if (!(p.min_sigma_intensity > 0.0f && std::isfinite(p.min_sigma_intensity)))
@@ -293,6 +300,9 @@ void BackgroundModel::save(const std::string& path) const {
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
   if (!f) throw std::runtime_error("background model: cannot write '" + path + "'");
   f.write(reinterpret_cast<const char*>(&h), sizeof(h));
+  char filter[kFilterField] = {};
+  std::memcpy(filter, params_.image_filter.data(), params_.image_filter.size());
+  f.write(filter, sizeof(filter));
   for (const auto* v : {&mean_r_, &mean_g_, &mean_i_, &var_r_, &var_g_, &var_i_})
     f.write(reinterpret_cast<const char*>(v->data()), std::streamsize(v->size() * sizeof(float)));
   if (!f) throw std::runtime_error("background model: error writing '" + path + "'");
@@ -309,8 +319,16 @@ BackgroundModel BackgroundModel::load(const std::string& path, int expected_widt
     throw std::runtime_error(where + "truncated header");
   if (std::memcmp(h.magic, kMagic, sizeof(kMagic)) != 0)
     throw std::runtime_error(where + "not a background model file (bad magic)");
-  if (h.version != kFormatVersion)
+  if (h.version != kFormatVersion && h.version != kFormatVersionWithoutFilter)
     throw std::runtime_error(where + "unsupported format version " + std::to_string(h.version));
+  std::string image_filter = "none";
+  if (h.version >= 2) {
+    char filter[kFilterField];
+    if (!f.read(filter, sizeof(filter))) throw std::runtime_error(where + "truncated header");
+    if (filter[kFilterField - 1] != '\0')
+      throw std::runtime_error(where + "corrupt image filter field");
+    image_filter = filter;
+  }
   if (h.width <= 0 || h.height <= 0 || h.width > 16384 || h.height > 16384)
     throw std::runtime_error(where + "implausible size " + std::to_string(h.width) + "x" +
                              std::to_string(h.height));
@@ -325,6 +343,7 @@ BackgroundModel BackgroundModel::load(const std::string& path, int expected_widt
   p.learning_rate = h.learning_rate;
   p.min_sigma_rg = h.min_sigma_rg;
   p.min_sigma_intensity = h.min_sigma_intensity;
+  p.image_filter = image_filter;
   BackgroundModel m;
   try {
     m = BackgroundModel(h.width, h.height, p);
@@ -335,7 +354,8 @@ BackgroundModel BackgroundModel::load(const std::string& path, int expected_widt
   for (auto* v : {&m.mean_r_, &m.mean_g_, &m.mean_i_, &m.var_r_, &m.var_g_, &m.var_i_})
     if (!f.read(reinterpret_cast<char*>(v->data()), std::streamsize(v->size() * sizeof(float))))
       throw std::runtime_error(where + "truncated data (expected " +
-                               std::to_string(6 * v->size() * sizeof(float) + sizeof(h)) +
+                               std::to_string(6 * v->size() * sizeof(float) + sizeof(h) +
+                                              (h.version >= 2 ? kFilterField : 0)) +
                                " bytes)");
   if (f.peek() != std::char_traits<char>::eof())
     throw std::runtime_error(where + "trailing bytes after the model data");

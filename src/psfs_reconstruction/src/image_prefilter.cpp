@@ -30,6 +30,12 @@ const char* imagePrefilterName(ImagePrefilter type) {
   }
 }
 
+std::string describeImagePrefilter(const ImagePrefilterParams& params) {
+  if (params.type == ImagePrefilter::kNone) return "none";
+  const std::string n = std::to_string(params.size);
+  return std::string(imagePrefilterName(params.type)) + " " + n + "x" + n;
+}
+
 void prefilterImages(const std::vector<cv::Mat>& rgb, const ImagePrefilterParams& params,
                      std::vector<cv::Mat>* out, int num_threads) {
   params.validate();

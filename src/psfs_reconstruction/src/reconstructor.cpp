@@ -79,15 +79,25 @@ void ReconstructorParams::validate() const {
   prefilter.validate();
 }
 
+namespace {
+// The parameters with the background models tagged by the images' filter (saved with them).
+ReconstructorParams withFilterTag(const ReconstructorParams& params) {
+  params.validate();
+  ReconstructorParams p = params;
+  p.background.image_filter = describeImagePrefilter(p.prefilter);
+  return p;
+}
+}  // namespace
+
 Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const ReconstructorParams& params)
-    : params_((params.validate(), params)),
+    : params_(withFilterTag(params)),
       classifier_(skin_model, params.classifier),
       clothing_(params.clothing),
       body_fusion_(params.body),
       skin_fusion_(params.skin),
       hand_fusion_(handFusionOptions(params, params.hand)) {
   // Background parameters are checked by constructing a model with them.
-  BackgroundModel probe(1, 1, params.background);
+  BackgroundModel probe(1, 1, params_.background);
   (void)probe;
   if (params.backend == ReconstructorParams::Backend::kCuda) {
     const cuda::DeviceInfo& d = cuda::device();
@@ -611,6 +621,14 @@ void Reconstructor::loadBackground(const std::string& directory,
     } catch (const std::exception& e) {
       throw std::runtime_error("background model " + path + ": " + e.what());
     }
+    // Its variances are those of the pixels it learned from: under another filter every pixel
+    // would be judged against the wrong noise.
+    const std::string& learned = models.back().params().image_filter;
+    if (learned != params_.background.image_filter)
+      throw std::runtime_error("background model " + path + " was learned from images through the "
+                               "prefilter '" + learned + "', but pixel_classifier/prefilter is '" +
+                               params_.background.image_filter +
+                               "' now: learn it again, or set the filter it was learned with");
     names.push_back(c.name);
   }
   loaded_backgrounds_ = std::move(models);

@@ -156,6 +156,9 @@ TEST(BackgroundModel, SelectiveUpdateOnlyWhereMaskIsZeroAndConvergesAtRateAlpha)
   EXPECT_NEAR(m.meanR().at<float>(0, 0), mu0 + a * d, 1e-6);
 }
 
+// A version-2 file: the 40-byte header, the image filter's 16 bytes, then the planes.
+constexpr size_t kHeaderBytes = 56;
+
 TEST(BackgroundModel, SaveLoadRoundTripAndFileChecks) {
   const BackgroundModel m = learnNoisy({{180, 150, 110}, {60, 80, 160}}, 2.0, 3);
   const std::string path = tempPath("psfs_bg_roundtrip.bin");
@@ -190,7 +193,7 @@ TEST(BackgroundModel, SaveLoadRoundTripAndFileChecks) {
   expectThrowContaining([&] { BackgroundModel::load(bad); }, "bad magic");
   std::string nan_bytes = bytes;
   const float nan = std::nanf("");
-  std::memcpy(&nan_bytes[40 + 3 * 4 * W * H + 4 * 17], &nan, 4);  // a var_r entry
+  std::memcpy(&nan_bytes[kHeaderBytes + 3 * 4 * W * H + 4 * 17], &nan, 4);  // a var_r entry
   write(nan_bytes);
   expectThrowContaining([&] { BackgroundModel::load(bad); }, "non-finite");
   write(bytes + "x");
@@ -198,6 +201,61 @@ TEST(BackgroundModel, SaveLoadRoundTripAndFileChecks) {
   expectThrowContaining([&] { BackgroundModel::load("/nonexistent/bg.bin"); }, "cannot open");
   std::remove(path.c_str());
   std::remove(bad.c_str());
+}
+
+// The filter the images passed before the model saw them travels with the file, so that the
+// Reconstructor can refuse a model learned from other pixels; files written before the field
+// existed (version 1) were learned from raw images.
+TEST(BackgroundModel, SavedFileRecordsTheImageFilter) {
+  BackgroundModelParams p;
+  p.learning_frames = 3;
+  p.image_filter = "median 3x3";
+  BackgroundModel m(W, H, p);
+  cv::Mat img(H, W, CV_8UC3, cv::Scalar(120, 100, 80));
+  for (int i = 0; i < 3; ++i) m.addLearningFrame(img);
+  ASSERT_TRUE(m.ready());
+  const std::string path = tempPath("psfs_bg_filter.bin");
+  m.save(path);
+  const BackgroundModel back = BackgroundModel::load(path);
+  EXPECT_EQ(back.params().image_filter, "median 3x3");
+  EXPECT_TRUE(samePlanes(back.varianceIntensity(), m.varianceIntensity()));
+
+  std::string bytes;
+  {
+    std::ifstream f(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(f), {});
+  }
+  const std::string old = tempPath("psfs_bg_v1.bin");
+  auto write = [&](const std::string& b) {
+    std::ofstream f(old, std::ios::binary | std::ios::trunc);
+    f.write(b.data(), std::streamsize(b.size()));
+  };
+  // Version 1: the same header without the filter's 16 bytes.
+  std::string v1 = bytes.substr(0, 40) + bytes.substr(kHeaderBytes);
+  const uint32_t one = 1;
+  std::memcpy(&v1[8], &one, 4);
+  write(v1);
+  const BackgroundModel legacy = BackgroundModel::load(old);
+  EXPECT_EQ(legacy.params().image_filter, "none");
+  EXPECT_TRUE(samePlanes(legacy.meanR(), m.meanR()));
+  // A filter field without its terminating NUL is corrupt.
+  std::string unterminated = bytes;
+  unterminated[kHeaderBytes - 1] = 'x';
+  write(unterminated);
+  expectThrowContaining([&] { BackgroundModel::load(old); }, "corrupt image filter");
+  const uint32_t three = 3;
+  std::string v3 = bytes;
+  std::memcpy(&v3[8], &three, 4);
+  write(v3);
+  expectThrowContaining([&] { BackgroundModel::load(old); }, "unsupported format version 3");
+
+  for (const std::string name : std::vector<std::string>{"", "a name of sixteen", "tab\there"}) {
+    BackgroundModelParams q;
+    q.image_filter = name;
+    EXPECT_THROW(BackgroundModel(W, H, q), std::invalid_argument) << "'" << name << "'";
+  }
+  std::remove(path.c_str());
+  std::remove(old.c_str());
 }
 
 TEST(BackgroundModel, RejectsBadInput) {

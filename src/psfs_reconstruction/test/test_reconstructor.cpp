@@ -357,6 +357,40 @@ TEST_F(ReconstructorTest, SavedBackgroundReloadsToTheSameVolumes) {
   fs::remove_all(dir);
 }
 
+// A model learned from filtered pixels has the filtered pixels' variances: loading it into a
+// reconstructor that classifies raw pixels (or the other way round) is refused, naming both.
+TEST_F(ReconstructorTest, ASavedBackgroundLoadsOnlyUnderItsOwnPrefilter) {
+  const fs::path dir = fs::temp_directory_path() / ("psfs_bgf_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  ReconstructorParams median = params_;
+  median.prefilter = ImagePrefilterParams{ImagePrefilter::kMedian, 3};
+  Reconstructor a(skin(), median);
+  learn(&a);
+  a.saveBackground(dir.string());
+
+  Reconstructor raw(skin(), params_);
+  psfs_test::expectThrowContaining<std::runtime_error>(
+      [&] { raw.loadBackground(dir.string(), cameras()); }, "prefilter 'median 3x3'");
+  psfs_test::expectThrowContaining<std::runtime_error>(
+      [&] { raw.loadBackground(dir.string(), cameras()); }, "pixel_classifier/prefilter is 'none'");
+  EXPECT_FALSE(raw.backgroundReady());
+  ReconstructorParams median5 = median;
+  median5.prefilter.size = 5;
+  Reconstructor other(skin(), median5);
+  EXPECT_THROW(other.loadBackground(dir.string(), cameras()), std::runtime_error);
+
+  Reconstructor same(skin(), median);
+  same.loadBackground(dir.string(), cameras());
+  const int f = kLearn + 20;
+  const auto images = rig_->render(f).images;
+  const FrameResult ra = a.process(images, cameras());
+  const FrameResult rs = same.process(images, cameras());
+  ASSERT_EQ(rs.status, FrameResult::Status::kReconstructed);
+  EXPECT_EQ(ra.body.data, rs.body.data);
+  EXPECT_EQ(ra.skin.data, rs.skin.data);
+  fs::remove_all(dir);
+}
+
 // A hand sub-volume around the true hand: 3.6 mm voxels, skin class. The centroid of its skin
 // voxels near the hand must match the centroid of the true skin there: the tolerance is the
 // visual-hull bloat of a hand seen by 8 cameras with one view allowed to disagree (a hull

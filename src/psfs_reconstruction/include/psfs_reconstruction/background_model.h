@@ -52,6 +52,12 @@ struct BackgroundModelParams {
   // there (the recording's empty part was shorter than learning_frames, or its first sets were
   // missed) and the frame is reconstructed; before that, it is skipped.
   int min_learning_frames = 10;
+  // The noise filter the camera's images pass before this model sees them (image_prefilter.h,
+  // describeImagePrefilter: "none", "median 3x3", ...). Not a setting of the model: the
+  // Reconstructor writes its own filter here, and a saved model carries it, so that a model
+  // learned from filtered pixels is not loaded under another filter (its variances would be
+  // those of other pixels). At most 15 printable characters.
+  std::string image_filter = "none";
 };
 
 class BackgroundModel {
@@ -107,8 +113,10 @@ class BackgroundModel {
   double density(int x, int y, double r, double g) const;
 
   // --- persistence ----------------------------------------------------------------------------
-  // Binary file: magic "PSFSBGM1", format version, width, height, frames, parameters, then the
-  // six float planes (little-endian IEEE). Only ready models can be saved.
+  // Binary file: magic "PSFSBGM1", format version (2), width, height, frames, parameters, the
+  // image filter (16 bytes, NUL-padded), then the six float planes (little-endian IEEE). Only
+  // ready models can be saved. Version 1 files (no filter field) load with filter "none": they
+  // were written before the filter existed or with it off by default.
   void save(const std::string& path) const;
   // Throws std::runtime_error for unreadable, truncated or corrupt files (bad magic/version,
   // non-finite or non-positive variances) and when expected_width/height (if > 0) differ.

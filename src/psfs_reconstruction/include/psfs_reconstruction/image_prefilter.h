@@ -43,6 +43,9 @@ struct ImagePrefilterParams {
 // "none", "median", "box"; throws std::invalid_argument for anything else.
 ImagePrefilter parseImagePrefilter(const std::string& name);
 const char* imagePrefilterName(ImagePrefilter type);
+// What the filter does, for logs, diagnostics and saved background models: "none", or the
+// name and window ("median 3x3"); the size is left out with kNone (it is unused there).
+std::string describeImagePrefilter(const ImagePrefilterParams& params);
 
 // Filters each non-empty rgb8 image of `rgb` into (*out)[i] (an empty image stays empty; kNone
 // copies the header, not the pixels). OpenMP over the images with num_threads (<= 0: OpenMP

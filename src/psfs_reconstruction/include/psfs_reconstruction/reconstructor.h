@@ -202,7 +202,9 @@ class Reconstructor {
   void saveBackground(const std::string& directory) const;
   // Loads <directory>/<name>.bgm for each camera; they are used once a frame set with these
   // cameras (names and sizes) arrives. Throws std::runtime_error naming the file that is
-  // missing or invalid; then nothing is loaded and the background is learned as usual.
+  // missing or invalid, or that was learned through another image prefilter than this
+  // reconstructor's (BackgroundModelParams::image_filter); then nothing is loaded and the
+  // background is learned as usual.
   void loadBackground(const std::string& directory,
                       const std::vector<tabletop_capture::CameraModel>& cameras);
 

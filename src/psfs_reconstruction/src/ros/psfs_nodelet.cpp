@@ -657,11 +657,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("tracker acks", gate.acks);
     stat.add("tracker ack timeouts", gate.ack_timeouts);
     stat.add("cameras switched off", cameras_off_);
-    stat.add("prefilter", cfg_.params.prefilter.type == ImagePrefilter::kNone
-                              ? std::string("none")
-                              : std::string(imagePrefilterName(cfg_.params.prefilter.type)) + " " +
-                                    std::to_string(cfg_.params.prefilter.size) + "x" +
-                                    std::to_string(cfg_.params.prefilter.size));
+    stat.add("prefilter", describeImagePrefilter(cfg_.params.prefilter));
     stat.add("prefilter (ms)", prefilter_ms_.mean());
     stat.add("classify (ms)", classify_ms_.mean());
     stat.add("evidence (ms)", evidence_ms_.mean());
