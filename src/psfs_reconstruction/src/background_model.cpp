@@ -12,6 +12,7 @@
 
 #include "psfs_reconstruction/image_checks.h"
 #include "classifier_kernels.h"
+#include "cpu_dispatch.h"
 #include "pixel_arithmetic.h"
 
 namespace psfs {
@@ -244,7 +245,7 @@ void BackgroundModel::update(const cv::Mat& rgb, const cv::Mat& foreground_mask,
   const float fi = params_.min_sigma_intensity * params_.min_sigma_intensity;
   // Rows are independent; the per-row scratch lives on each thread.
 #ifdef _OPENMP
-  const int nt = num_threads > 0 ? num_threads : omp_get_max_threads();
+  const int nt = resolveThreads(num_threads);
 #pragma omp parallel num_threads(nt)
 #endif
   {

@@ -13,6 +13,7 @@
 #include "psfs_reconstruction/color_space.h"
 #include "psfs_reconstruction/image_checks.h"
 #include "classifier_kernels.h"
+#include "cpu_dispatch.h"
 #include "pixel_stage_host.h"
 
 namespace psfs {
@@ -337,7 +338,7 @@ void PixelClassifier::classifyRows(const cv::Mat* rgb, const BackgroundModel* co
   const int K = int(skin_terms_.size());
 
 #ifdef _OPENMP
-  const int nt = num_threads > 0 ? num_threads : omp_get_max_threads();
+  const int nt = resolveThreads(num_threads);
 #pragma omp parallel num_threads(nt)
 #endif
   {

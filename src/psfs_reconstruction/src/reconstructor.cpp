@@ -11,6 +11,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "cpu_dispatch.h"
 #include "gpu_frame_path.h"
 #include "psfs_reconstruction/cuda_device.h"
 #include "psfs_reconstruction/image_checks.h"
@@ -572,8 +573,7 @@ std::vector<cv::Mat> Reconstructor::backProject(const ProbabilityVolume& volume,
   std::vector<Eigen::Vector3i> occupied;
   for (size_t i = 0; i < volume.data.size(); ++i)
     if (volume.data[i] > threshold_byte) occupied.push_back(g.coords(i));
-#pragma omp parallel for num_threads(params_.threads > 0 ? params_.threads : omp_get_max_threads()) \
-    schedule(static)
+#pragma omp parallel for num_threads(resolveThreads(params_.threads)) schedule(static)
   for (int c = 0; c < n; ++c) {
     const auto& cam = cameras_[c];
     cv::Mat& m = masks[c];
