@@ -125,6 +125,12 @@ void TrackingEvaluator::add(double time, const std::vector<TrackedPoint>& tracke
       r.error_mm.add(err);
       r.bias_sum_mm += 1e3 * (track->position - truth_pos);
       r.error_vectors_mm.push_back(1e3 * (track->position - truth_pos));
+      const Eigen::Vector3d& axis = truth.axis[t];
+      if (axis.allFinite() && axis.squaredNorm() > 0.25) {
+        const Eigen::Vector3d e = 1e3 * (track->position - truth_pos), u = axis.normalized();
+        r.along_mm.add(e.dot(u));
+        r.across_mm.add((e - e.dot(u) * u).norm());
+      }
       ++r.tracked_frames;
       series_mm_[t].push_back(err);
     } else {
@@ -171,6 +177,11 @@ std::string TrackingEvaluator::summary() const {
       if (!isHandTarget(t)) {
         std::snprintf(buf, sizeof(buf), " | aligned %.1f mm (bias removed, thesis 7.1)",
                       r.alignedErrorMeanMm());
+        s += buf;
+      }
+      if (r.along_mm.count() > 0) {
+        std::snprintf(buf, sizeof(buf), " | along the hand %+.1f mm (+: towards the fingers), across %.1f",
+                      r.along_mm.mean(), r.across_mm.mean());
         s += buf;
       }
       if (r.merges > 0) {

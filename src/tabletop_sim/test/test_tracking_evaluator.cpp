@@ -163,3 +163,27 @@ TEST(TrackingEvaluator, WritesAPlot) {
   EXPECT_TRUE(ev.writePlot(path));
   std::remove(path.c_str());
 }
+
+// Where the truth gives an axis (the hands: wrist -> hand), the error is split into a signed
+// part along it and a distance across it; without one nothing is reported.
+TEST(TrackingEvaluator, TheErrorSplitsAlongTheHandsAxis) {
+  TrackingEvaluator ev;
+  const Eigen::Vector3d along(0.0, 0.012, 0.0), across(0.003, 0.0, 0.004);  // +12 mm, 5 mm
+  for (int i = 0; i < 20; ++i) {
+    TruthPoints tr = truthAt(i * kDt);
+    tr.axis[0] = Eigen::Vector3d(0.0, 2.0, 0.0);   // any length: only the direction counts
+    tr.axis[1] = Eigen::Vector3d(0.0, -1.0, 0.0);  // the right hand points the other way
+    ev.add(i * kDt, {track(7, true, tr.position[0] + along + across),
+                     track(8, true, tr.position[1] + along), track(9, false, tr.position[2] + along)},
+           tr);
+  }
+  EXPECT_NEAR(ev.report(0).along_mm.mean(), 12.0, 1e-9);
+  EXPECT_NEAR(ev.report(0).across_mm.mean(), 5.0, 1e-9);
+  EXPECT_NEAR(ev.report(0).error_mm.mean(), 13.0, 1e-9);
+  EXPECT_NEAR(ev.report(1).along_mm.mean(), -12.0, 1e-9);
+  EXPECT_NEAR(ev.report(1).across_mm.mean(), 0.0, 1e-9);
+  EXPECT_EQ(ev.report(2).along_mm.count(), 0u);  // the head has no axis
+  const std::string s = ev.summary();
+  EXPECT_NE(s.find("along the hand +12.0 mm (+: towards the fingers), across 5.0"), std::string::npos) << s;
+  EXPECT_NE(s.find("along the hand -12.0 mm"), std::string::npos) << s;
+}

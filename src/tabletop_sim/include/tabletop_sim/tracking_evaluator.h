@@ -40,6 +40,12 @@ struct TrackedPoint {
 struct TruthPoints {
   std::array<Eigen::Vector3d, 3> position{};
   std::array<bool, 3> visible{{false, false, false}};
+  // Optional unit direction per target along which the error is also split (zero: none).
+  // Hands: from the wrist towards the hand's centre, so that "along" says whether a tracker
+  // reports a point nearer the fingers (+) or the forearm (-): the hand target's systematic
+  // error on generated people lies along this axis (docs/benchmarks.md, 2026-12-07).
+  std::array<Eigen::Vector3d, 3> axis{
+      {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}};
 };
 
 struct TrackingEvaluatorParams {
@@ -65,6 +71,9 @@ class TrackingEvaluator {
     Eigen::Vector3d biasMm() const {
       return error_mm.count() ? Eigen::Vector3d(bias_sum_mm / error_mm.count()) : Eigen::Vector3d::Zero();
     }
+    // Where the truth has an axis: the signed error along it (mm, + in the axis' direction)
+    // and the distance from the axis line (mm), over the tracked frames that have one.
+    tabletop_common::RunningStats along_mm, across_mm;
     // The error vectors (tracked - truth, mm) of those frames.
     std::vector<Eigen::Vector3d> error_vectors_mm;
     // Mean distance from the truth once the mean offset (the bias) is removed: the thesis'
