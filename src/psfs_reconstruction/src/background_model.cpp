@@ -322,13 +322,16 @@ BackgroundModel BackgroundModel::load(const std::string& path, int expected_widt
     throw std::runtime_error(where + "not a background model file (bad magic)");
   if (h.version != kFormatVersion && h.version != kFormatVersionWithoutFilter)
     throw std::runtime_error(where + "unsupported format version " + std::to_string(h.version));
-  std::string image_filter = "none";
+  std::string image_filter = kUnrecordedImageFilter;
   if (h.version >= 2) {
     char filter[kFilterField];
     if (!f.read(filter, sizeof(filter))) throw std::runtime_error(where + "truncated header");
-    if (filter[kFilterField - 1] != '\0')
+    // The name, then NULs only (at least one).
+    const char* const last = filter + kFilterField;
+    const char* const end = std::find(static_cast<const char*>(filter), last, '\0');
+    if (end == last || std::any_of(end, last, [](char c) { return c != '\0'; }))
       throw std::runtime_error(where + "corrupt image filter field");
-    image_filter = filter;
+    image_filter.assign(static_cast<const char*>(filter), end);
   }
   if (h.width <= 0 || h.height <= 0 || h.width > 16384 || h.height > 16384)
     throw std::runtime_error(where + "implausible size " + std::to_string(h.width) + "x" +

@@ -106,7 +106,7 @@ Reconstructor::Reconstructor(const GaussianMixture2D& skin_model, const Reconstr
       backend_warning_ = "backend cuda: " + d.describe() + "; running on the CPU";
     } else {
       try {
-        ReconstructorParams device_params = params;
+        ReconstructorParams device_params = params_;
         device_params.hand = handFusionOptions(params, params.hand);
         gpu_ = std::make_unique<GpuFramePath>(skin_model, device_params);
         active_backend_ = ReconstructorParams::Backend::kCuda;
@@ -623,12 +623,19 @@ void Reconstructor::loadBackground(const std::string& directory,
     }
     // Its variances are those of the pixels it learned from: under another filter every pixel
     // would be judged against the wrong noise.
+    // A version-1 file does not say: it is taken as learned from raw pixels, the only case
+    // before the filter existed.
     const std::string& learned = models.back().params().image_filter;
-    if (learned != params_.background.image_filter)
+    const std::string& ours = params_.background.image_filter;
+    if (learned == kUnrecordedImageFilter && ours != "none")
+      throw std::runtime_error("background model " + path + " (format version 1) does not record the "
+                               "prefilter it was learned through, and pixel_classifier/prefilter and "
+                               "prefilter_size give '" + ours + "': learn it again");
+    if (learned != kUnrecordedImageFilter && learned != ours)
       throw std::runtime_error("background model " + path + " was learned from images through the "
-                               "prefilter '" + learned + "', but pixel_classifier/prefilter is '" +
-                               params_.background.image_filter +
-                               "' now: learn it again, or set the filter it was learned with");
+                               "prefilter '" + learned + "', but pixel_classifier/prefilter and "
+                               "prefilter_size give '" + ours +
+                               "': learn it again, or set the filter it was learned with");
     names.push_back(c.name);
   }
   loaded_backgrounds_ = std::move(models);

@@ -236,12 +236,16 @@ TEST(BackgroundModel, SavedFileRecordsTheImageFilter) {
   std::memcpy(&v1[8], &one, 4);
   write(v1);
   const BackgroundModel legacy = BackgroundModel::load(old);
-  EXPECT_EQ(legacy.params().image_filter, "none");
+  EXPECT_EQ(legacy.params().image_filter, psfs::kUnrecordedImageFilter);
   EXPECT_TRUE(samePlanes(legacy.meanR(), m.meanR()));
   // A filter field without its terminating NUL is corrupt.
   std::string unterminated = bytes;
   unterminated[kHeaderBytes - 1] = 'x';
   write(unterminated);
+  expectThrowContaining([&] { BackgroundModel::load(old); }, "corrupt image filter");
+  std::string garbage = bytes;  // "median 3x3", NUL, then something after it
+  garbage[kHeaderBytes - 2] = 'x';
+  write(garbage);
   expectThrowContaining([&] { BackgroundModel::load(old); }, "corrupt image filter");
   const uint32_t three = 3;
   std::string v3 = bytes;
@@ -249,11 +253,14 @@ TEST(BackgroundModel, SavedFileRecordsTheImageFilter) {
   write(v3);
   expectThrowContaining([&] { BackgroundModel::load(old); }, "unsupported format version 3");
 
-  for (const std::string name : std::vector<std::string>{"", "a name of sixteen", "tab\there"}) {
+  for (const std::string& name : std::vector<std::string>{"", std::string(16, 'a'), "tab\there"}) {
     BackgroundModelParams q;
     q.image_filter = name;
     EXPECT_THROW(BackgroundModel(W, H, q), std::invalid_argument) << "'" << name << "'";
   }
+  BackgroundModelParams longest;
+  longest.image_filter = std::string(15, 'a');  // the field's 16 bytes with its NUL
+  EXPECT_NO_THROW(BackgroundModel(W, H, longest));
   std::remove(path.c_str());
   std::remove(old.c_str());
 }

@@ -11,6 +11,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <cstring>
 #include <fstream>
 
 #include "psfs_reconstruction/cuda_device.h"
@@ -358,7 +359,8 @@ TEST_F(ReconstructorTest, SavedBackgroundReloadsToTheSameVolumes) {
 }
 
 // A model learned from filtered pixels has the filtered pixels' variances: loading it into a
-// reconstructor that classifies raw pixels (or the other way round) is refused, naming both.
+// reconstructor that classifies raw pixels, through another window, or the other way round, is
+// refused, naming both; a refused load leaves the background to be learned.
 TEST_F(ReconstructorTest, ASavedBackgroundLoadsOnlyUnderItsOwnPrefilter) {
   const fs::path dir = fs::temp_directory_path() / ("psfs_bgf_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -372,12 +374,40 @@ TEST_F(ReconstructorTest, ASavedBackgroundLoadsOnlyUnderItsOwnPrefilter) {
   psfs_test::expectThrowContaining<std::runtime_error>(
       [&] { raw.loadBackground(dir.string(), cameras()); }, "prefilter 'median 3x3'");
   psfs_test::expectThrowContaining<std::runtime_error>(
-      [&] { raw.loadBackground(dir.string(), cameras()); }, "pixel_classifier/prefilter is 'none'");
-  EXPECT_FALSE(raw.backgroundReady());
+      [&] { raw.loadBackground(dir.string(), cameras()); },
+      "pixel_classifier/prefilter and prefilter_size give 'none'");
+  EXPECT_EQ(raw.process(rig_->render(0).images, cameras()).status,
+            FrameResult::Status::kLearningBackground);
   ReconstructorParams median5 = median;
   median5.prefilter.size = 5;
   Reconstructor other(skin(), median5);
-  EXPECT_THROW(other.loadBackground(dir.string(), cameras()), std::runtime_error);
+  psfs_test::expectThrowContaining<std::runtime_error>(
+      [&] { other.loadBackground(dir.string(), cameras()); }, "give 'median 5x5'");
+  // The other way round: raw pixels' models under the filter.
+  const fs::path raw_dir = dir / "raw";
+  fs::create_directories(raw_dir);
+  Reconstructor r(skin(), params_);
+  learn(&r);
+  r.saveBackground(raw_dir.string());
+  Reconstructor filtering(skin(), median);
+  psfs_test::expectThrowContaining<std::runtime_error>(
+      [&] { filtering.loadBackground(raw_dir.string(), cameras()); }, "prefilter 'none'");
+  // Version-1 files (no filter recorded) pass as raw pixels' models only.
+  for (const auto& e : fs::directory_iterator(raw_dir)) {
+    std::ifstream in(e.path(), std::ios::binary);
+    std::string b((std::istreambuf_iterator<char>(in)), {});
+    in.close();
+    const uint32_t one = 1;
+    std::memcpy(&b[8], &one, 4);
+    b.erase(40, 16);
+    std::ofstream(e.path(), std::ios::binary | std::ios::trunc).write(b.data(), std::streamsize(b.size()));
+  }
+  psfs_test::expectThrowContaining<std::runtime_error>(
+      [&] { filtering.loadBackground(raw_dir.string(), cameras()); }, "format version 1");
+  Reconstructor legacy(skin(), params_);
+  legacy.loadBackground(raw_dir.string(), cameras());
+  EXPECT_EQ(legacy.process(rig_->render(kLearn + 20).images, cameras()).status,
+            FrameResult::Status::kReconstructed);
 
   Reconstructor same(skin(), median);
   same.loadBackground(dir.string(), cameras());

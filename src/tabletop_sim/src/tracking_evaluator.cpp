@@ -126,7 +126,7 @@ void TrackingEvaluator::add(double time, const std::vector<TrackedPoint>& tracke
       r.bias_sum_mm += 1e3 * (track->position - truth_pos);
       r.error_vectors_mm.push_back(1e3 * (track->position - truth_pos));
       const Eigen::Vector3d& axis = truth.axis[t];
-      if (axis.allFinite() && axis.squaredNorm() > 0.25) {
+      if (axis.allFinite() && axis.squaredNorm() > 1e-12) {
         const Eigen::Vector3d e = 1e3 * (track->position - truth_pos), u = axis.normalized();
         r.along_mm.add(e.dot(u));
         r.across_mm.add((e - e.dot(u) * u).norm());
@@ -180,7 +180,9 @@ std::string TrackingEvaluator::summary() const {
         s += buf;
       }
       if (r.along_mm.count() > 0) {
-        std::snprintf(buf, sizeof(buf), " | along the hand %+.1f mm (+: towards the fingers), across %.1f",
+        std::snprintf(buf, sizeof(buf),
+                      isHandTarget(t) ? " | along the hand %+.1f mm (+: towards the fingers), across %.1f"
+                                      : " | along its axis %+.1f mm, across %.1f",
                       r.along_mm.mean(), r.across_mm.mean());
         s += buf;
       }

@@ -60,6 +60,9 @@ struct BackgroundModelParams {
   std::string image_filter = "none";
 };
 
+// The image_filter of a model loaded from a version-1 file, which does not record it.
+inline constexpr const char* kUnrecordedImageFilter = "unrecorded";
+
 class BackgroundModel {
  public:
   BackgroundModel() = default;
@@ -115,8 +118,9 @@ class BackgroundModel {
   // --- persistence ----------------------------------------------------------------------------
   // Binary file: magic "PSFSBGM1", format version (2), width, height, frames, parameters, the
   // image filter (16 bytes, NUL-padded), then the six float planes (little-endian IEEE). Only
-  // ready models can be saved. Version 1 files (no filter field) load with filter "none": they
-  // were written before the filter existed or with it off by default.
+  // ready models can be saved. Version 1 files (no filter field) load with image_filter
+  // kUnrecordedImageFilter: most were learned from raw pixels (the filter came later and is off
+  // by default), but one saved with the filter on cannot be told apart.
   void save(const std::string& path) const;
   // Throws std::runtime_error for unreadable, truncated or corrupt files (bad magic/version,
   // non-finite or non-positive variances) and when expected_width/height (if > 0) differ.

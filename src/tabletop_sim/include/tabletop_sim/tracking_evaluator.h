@@ -40,10 +40,12 @@ struct TrackedPoint {
 struct TruthPoints {
   std::array<Eigen::Vector3d, 3> position{};
   std::array<bool, 3> visible{{false, false, false}};
-  // Optional unit direction per target along which the error is also split (zero: none).
-  // Hands: from the wrist towards the hand's centre, so that "along" says whether a tracker
-  // reports a point nearer the fingers (+) or the forearm (-): the hand target's systematic
-  // error on generated people lies along this axis (docs/benchmarks.md, 2026-12-07).
+  // Optional direction per target (any length; zero: none) along which the error is also
+  // split. Hands: from the wrist towards the hand's centre, so that "along" says whether a
+  // tracker reports a point nearer the fingers (+) or the forearm (-): the hand target's
+  // systematic error on generated people lies along this axis (docs/benchmarks.md,
+  // 2026-12-07). The simulator tools (scenario_suite, track_eval on the simulated rig) fill it;
+  // truth read from ground_truth/targets (bags, the demo monitor) has no wrists and none.
   std::array<Eigen::Vector3d, 3> axis{
       {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}};
 };
