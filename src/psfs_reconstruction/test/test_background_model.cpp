@@ -26,6 +26,16 @@ std::string tempPath(const std::string& name) {
   return (::testing::TempDir().empty() ? std::string("/tmp/") : ::testing::TempDir()) + name;
 }
 
+std::string readFile(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+void writeFile(const std::string& path, const std::string& bytes) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
 BackgroundModel learnNoisy(const std::vector<Rgb>& bands, double sigma, std::uint64_t seed,
                            const BackgroundModelParams& params = {}) {
   BackgroundModel m(W, H, params);
@@ -177,16 +187,9 @@ TEST(BackgroundModel, SaveLoadRoundTripAndFileChecks) {
 
   expectThrowContaining([&] { BackgroundModel::load(path, 640, 480); }, "does not match");
 
-  std::string bytes;
-  {
-    std::ifstream f(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(f), {});
-  }
+  const std::string bytes = readFile(path);
   const std::string bad = tempPath("psfs_bg_bad.bin");
-  auto write = [&](const std::string& b) {
-    std::ofstream f(bad, std::ios::binary | std::ios::trunc);
-    f.write(b.data(), std::streamsize(b.size()));
-  };
+  auto write = [&](const std::string& b) { writeFile(bad, b); };
   write(bytes.substr(0, bytes.size() - 100));
   expectThrowContaining([&] { BackgroundModel::load(bad); }, "truncated");
   write("NOTAMODEL" + bytes.substr(9));
@@ -220,16 +223,9 @@ TEST(BackgroundModel, SavedFileRecordsTheImageFilter) {
   EXPECT_EQ(back.params().image_filter, "median 3x3");
   EXPECT_TRUE(samePlanes(back.varianceIntensity(), m.varianceIntensity()));
 
-  std::string bytes;
-  {
-    std::ifstream f(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(f), {});
-  }
+  const std::string bytes = readFile(path);
   const std::string old = tempPath("psfs_bg_v1.bin");
-  auto write = [&](const std::string& b) {
-    std::ofstream f(old, std::ios::binary | std::ios::trunc);
-    f.write(b.data(), std::streamsize(b.size()));
-  };
+  auto write = [&](const std::string& b) { writeFile(old, b); };
   // Version 1: the same header without the filter's 16 bytes.
   std::string v1 = bytes.substr(0, 40) + bytes.substr(kHeaderBytes);
   const uint32_t one = 1;
