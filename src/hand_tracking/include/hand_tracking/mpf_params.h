@@ -147,14 +147,20 @@ struct MpfParams {
   // Why: the box likelihood peaks where the box holds the most skin, which is where the palm
   // is, not at the centroid of palm + fingers; the frontal-plane factor pushes it towards the
   // finger tips. The refinement measures what the target's position is defined as.
-  // Hands: a 20 cm box holds a whole hand (wrist to finger tips ~18 cm); voxels above 0.6
+  // Hands: a 16 cm box, +-8 cm around the estimate: from the centre of an average hand's visible
+  // skin (about 8 cm from the wrist) it reaches the wrist and most of the fingers. The 20 cm box
+  // used until 2026-12-07 also took in the hull's skin halo around a bare forearm and nearby
+  // skin blobs, and the mean shift followed them: on 72 generated scenarios (100 frames) the
+  // hands' medians went 30.7 / 59.3 / 35.3 -> 26.0 / 54.6 / 35.2 mm (12 scenarios better by
+  // more than 3 mm, 1 worse), on 24 others not used to choose it 67.6 -> 60.6 mm (5 / 2);
+  // docs/benchmarks.md, 2026-12-07. Voxels above 0.6
   // count (the hull at the hand meshes' iso level, thesis 6.5): lower thresholds let in the
   // fringe of voxels that are skin in only some views, higher ones keep only the hull's thick
   // core (palm, wrist) and lose the fingers. On the simulated rig (reach_targets; 'all'):
   // 0.9 -> 9.4 / 10.6 mm (12.1 / 17.4), 0.75 -> 6.9 / 9.2, 0.6 -> 6.1 / 8.0 (7.2 / 8.9),
   // 0.4 -> 6.4 / 9.7 mm (left / right hand means).
   bool refine_hand_centroid = true;
-  Eigen::Vector3d hand_centroid_box{0.20, 0.20, 0.20};
+  Eigen::Vector3d hand_centroid_box{0.16, 0.16, 0.16};
   double hand_centroid_threshold = 0.6;
   // Distal cut of that centroid (m, 0 = off; distal_centroid.h): with short or rolled sleeves
   // the forearm is skin as well, and the box's centroid slid 9-18 cm down the arm on generated
