@@ -627,7 +627,7 @@ void Reconstructor::loadBackground(const std::string& directory,
     // before the filter existed.
     const std::string& learned = models.back().params().image_filter;
     const std::string& ours = params_.background.image_filter;
-    if (learned == kUnrecordedImageFilter && ours != "none")
+    if (learned == kUnrecordedImageFilter && params_.prefilter.type != ImagePrefilter::kNone)
       throw std::runtime_error("background model " + path + " (format version 1) does not record the "
                                "prefilter it was learned through, and pixel_classifier/prefilter and "
                                "prefilter_size give '" + ours + "': learn it again");

@@ -83,6 +83,13 @@ class ReconstructorTest : public ::testing::Test {
     ASSERT_TRUE(r->backgroundReady());
   }
 
+  // Learns the background and saves it into `dir` (created).
+  void learnAndSave(Reconstructor* r, const fs::path& dir) {
+    learn(r);
+    fs::create_directories(dir);
+    r->saveBackground(dir.string());
+  }
+
   // A set with the person in view gives the same volumes from a reconstructor that learned the
   // background and from one that loaded it.
   void expectSameVolumes(Reconstructor* learned, Reconstructor* loaded) {
@@ -349,10 +356,8 @@ TEST_F(ReconstructorTest, CudaBackendGivesTheCpuVolumesOrFallsBackOnce) {
 
 TEST_F(ReconstructorTest, SavedBackgroundReloadsToTheSameVolumes) {
   const fs::path dir = fs::temp_directory_path() / ("psfs_bg_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
   Reconstructor a(skin(), params_);
-  learn(&a);
-  a.saveBackground(dir.string());
+  learnAndSave(&a, dir);
 
   Reconstructor b(skin(), params_);
   // A missing model is a clear error naming the file; nothing is loaded.
@@ -368,12 +373,10 @@ TEST_F(ReconstructorTest, SavedBackgroundReloadsToTheSameVolumes) {
 // refused, naming both; a refused load leaves the background to be learned.
 TEST_F(ReconstructorTest, ASavedBackgroundLoadsOnlyUnderItsOwnPrefilter) {
   const fs::path dir = fs::temp_directory_path() / ("psfs_bgf_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
   ReconstructorParams median = params_;
   median.prefilter = ImagePrefilterParams{ImagePrefilter::kMedian, 3};
   Reconstructor a(skin(), median);
-  learn(&a);
-  a.saveBackground(dir.string());
+  learnAndSave(&a, dir);
 
   Reconstructor raw(skin(), params_);
   psfs_test::expectThrowContaining<std::runtime_error>(
@@ -390,10 +393,8 @@ TEST_F(ReconstructorTest, ASavedBackgroundLoadsOnlyUnderItsOwnPrefilter) {
       [&] { other.loadBackground(dir.string(), cameras()); }, "give 'median 5x5'");
   // The other way round: raw pixels' models under the filter.
   const fs::path raw_dir = dir / "raw";
-  fs::create_directories(raw_dir);
   Reconstructor r(skin(), params_);
-  learn(&r);
-  r.saveBackground(raw_dir.string());
+  learnAndSave(&r, raw_dir);
   Reconstructor filtering(skin(), median);
   psfs_test::expectThrowContaining<std::runtime_error>(
       [&] { filtering.loadBackground(raw_dir.string(), cameras()); }, "prefilter 'none'");

@@ -23,6 +23,12 @@ const TrackedPoint* findTrack(const std::vector<TrackedPoint>& tracked, uint32_t
 
 }  // namespace
 
+void setHandAxes(const std::array<Eigen::Vector3d, 2>& wrist, TruthPoints* truth) {
+  for (int side = 0; side < 2; ++side)
+    if (wrist[side].allFinite() && truth->position[side].allFinite())
+      truth->axis[side] = (truth->position[side] - wrist[side]).normalized();
+}
+
 const char* TrackingEvaluator::targetName(int t) {
   static const char* names[3] = {"left hand", "right hand", "head"};
   return t >= 0 && t < 3 ? names[t] : "?";

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <limits>
 
 #include "tabletop_sim/tracking_evaluator.h"
 
@@ -186,4 +187,15 @@ TEST(TrackingEvaluator, TheErrorSplitsAlongTheHandsAxis) {
   const std::string s = ev.summary();
   EXPECT_NE(s.find("along the hand +12.0 mm (+: towards the fingers), across 5.0"), std::string::npos) << s;
   EXPECT_NE(s.find("along the hand -12.0 mm"), std::string::npos) << s;
+}
+
+// The hands' axes from the wrists: unit vectors towards the hands; none without a finite wrist.
+TEST(TrackingEvaluator, HandAxesPointFromTheWristsToTheHands) {
+  TruthPoints tr = truthAt(0.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  tabletop_sim::setHandAxes({tr.position[0] - Eigen::Vector3d(0.0, 0.08, 0.0), Eigen::Vector3d(nan, 0.0, 0.0)},
+                            &tr);
+  EXPECT_NEAR((tr.axis[0] - Eigen::Vector3d(0.0, 1.0, 0.0)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(tr.axis[1], Eigen::Vector3d::Zero());
+  EXPECT_EQ(tr.axis[2], Eigen::Vector3d::Zero());
 }

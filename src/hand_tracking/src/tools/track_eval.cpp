@@ -69,9 +69,7 @@ sim::TruthPoints truthOf(const sim::GroundTruth& g) {
   t.visible = {g.person_present && g.left_hand_in_workspace,
                g.person_present && g.right_hand_in_workspace,
                g.person_present && g.head_in_workspace};
-  for (int side = 0; side < 2; ++side)  // wrist -> hand: the hand target's error splits along it
-    if (g.wrist[side].allFinite() && t.position[side].allFinite())
-      t.axis[side] = (t.position[side] - g.wrist[side]).normalized();
+  sim::setHandAxes(g.wrist, &t);  // the hand target's error splits along wrist -> hand
   return t;
 }
 

@@ -50,6 +50,10 @@ struct TruthPoints {
       {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}};
 };
 
+// The hands' axes (axis[0], axis[1]) from the wrists (left, right) to the hands' positions
+// already in `truth`; a hand without a finite wrist or position keeps none.
+void setHandAxes(const std::array<Eigen::Vector3d, 2>& wrist, TruthPoints* truth);
+
 struct TrackingEvaluatorParams {
   double match_radius = 0.10;   // m: a track farther than this from the truth does not track it
   double switch_margin = 0.03;  // m: how much nearer another track must be to take over
