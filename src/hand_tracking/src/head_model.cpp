@@ -64,6 +64,7 @@ void HeadModelParams::validate() const {
   if (iterations < 1) fail("iterations", "must be >= 1");
   positive(top_above_centre, "top_above_centre");
   if (!(vertex_weight >= 0.0 && vertex_weight <= 1.0)) fail("vertex_weight", "must lie in [0, 1]");
+  if (!(face_weight >= 0.0 && face_weight <= 1.0)) fail("face_weight", "must lie in [0, 1]");
 }
 
 HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d& face,
@@ -153,7 +154,8 @@ HeadFit fitHeadCentre(const psfs::ProbabilityVolume& body, const Eigen::Vector3d
     z = from_top;
     fit.from_top = true;
   }
-  fit.centre = Eigen::Vector3d(axis.x(), axis.y(), z);
+  const Eigen::Vector2d xy = (1.0 - p.face_weight) * axis + p.face_weight * face.head<2>();
+  fit.centre = Eigen::Vector3d(xy.x(), xy.y(), z);
   fit.ok = true;
 
   return fit;

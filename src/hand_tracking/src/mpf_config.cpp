@@ -62,6 +62,7 @@ void addMpfKeys(MpfConfig* c, tabletop_common::ConfigSchema* s) {
       .add("head_fit/iterations", &p.head_fit.iterations)
       .add("head_fit/top_above_centre", &p.head_fit.top_above_centre)
       .add("head_fit/vertex_weight", &p.head_fit.vertex_weight)
+      .add("head_fit/face_weight", &p.head_fit.face_weight)
       .add("threads", &p.threads);
   s->add("seed", &c->nodelet.seed)
       .add("publish_particles", &c->nodelet.publish_particles)

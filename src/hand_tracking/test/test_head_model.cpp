@@ -60,11 +60,14 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
   // which on a cap is low by up to a voxel (16 mm). Bald: half of 20 + 16 mm from the top
   // (vertex_weight 0.5), half of the vertex's 8 mm: 22 mm; with hair within 12 mm in z and
   // 19 mm in y, plus 8 mm.
+  // The centre's x and y here are the axis alone (face_weight 0; the blend: next test).
   const Vector3d centre(0.03, -0.30, 0.55);
   const Vector3d face = centre + Vector3d(0.0, 0.07, -0.04);
+  HeadModelParams axis_only;
+  axis_only.face_weight = 0.0;
   for (int hair : {0, 1}) {
     const psfs::ProbabilityVolume v = volume(person(centre, hair));
-    const auto fit = fitHeadCentre(v, face, HeadModelParams());
+    const auto fit = fitHeadCentre(v, face, axis_only);
     ASSERT_TRUE(fit.ok) << "hair " << hair;
     EXPECT_FALSE(fit.clipped);
     EXPECT_FALSE(fit.from_top);  // the blend of vertex and top, not the top alone
@@ -77,6 +80,39 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
     EXPECT_LT(e.norm(), hair ? std::hypot(0.012, 0.019) + 0.008 : 0.022);
     EXPECT_LT(e.norm(), (face - centre).norm() / 3);
   }
+}
+
+TEST(HeadModel, TheFaceEstimatePullsAHairedHeadForward) {
+  // Hair at the back of the head moves the blob's axis back (the test above: up to 19 mm);
+  // the face estimate lies 70 mm in front. With face_weight w the centre's x and y are
+  // (1 - w) axis + w face, its height unchanged: at the default 0.25 the error along y is
+  // 0.75 x (the axis' error) + 0.25 x 70 mm, smaller than the axis' own here.
+  const Vector3d centre(0.03, -0.30, 0.55);
+  const Vector3d face = centre + Vector3d(0.0, 0.07, -0.04);
+  const psfs::ProbabilityVolume v = volume(person(centre, 1));
+  HeadModelParams axis_only;
+  axis_only.face_weight = 0.0;
+  const auto axis_fit = fitHeadCentre(v, face, axis_only);
+  const HeadModelParams blended;  // the default
+  const auto fit = fitHeadCentre(v, face, blended);
+  ASSERT_TRUE(axis_fit.ok);
+  ASSERT_TRUE(fit.ok);
+  const double w = blended.face_weight;
+  EXPECT_EQ(w, 0.25);
+  const double axis_error_y = axis_fit.centre.y() - centre.y();
+  std::printf("axis alone: y error %.1f mm; with face_weight %.2f: %.1f mm\n",
+              1e3 * axis_error_y, w, 1e3 * (fit.centre.y() - centre.y()));
+  EXPECT_LT(axis_error_y, -0.008);  // hair at the back: the axis lies behind the centre
+  EXPECT_NEAR(fit.centre.x(), (1 - w) * axis_fit.centre.x() + w * face.x(), 1e-12);
+  EXPECT_NEAR(fit.centre.y(), (1 - w) * axis_fit.centre.y() + w * face.y(), 1e-12);
+  EXPECT_EQ(fit.centre.z(), axis_fit.centre.z());
+  EXPECT_LT(std::abs(fit.centre.y() - centre.y()), std::abs(axis_error_y));
+  // All the weight on the face: its x and y.
+  HeadModelParams face_only;
+  face_only.face_weight = 1.0;
+  const auto face_fit = fitHeadCentre(v, face, face_only);
+  ASSERT_TRUE(face_fit.ok);
+  EXPECT_NEAR((face_fit.centre - face).head<2>().norm(), 0.0, 1e-12);
 }
 
 TEST(HeadModel, AProfileWithoutAWidestLevelGivesTheTopBasedCentre) {
@@ -124,10 +160,14 @@ TEST(HeadModel, AProfileWithoutAWidestLevelGivesTheTopBasedCentre) {
 
 TEST(HeadModel, HeadCutOffByTheWorkspaceCeiling) {
   // A tall person: the head's top is above the workspace (0.75 m). The top is unknown, the
-  // widest level is inside: the vertex alone, within a voxel.
+  // widest level is inside: the vertex alone, within a voxel. (The axis alone for x and y: a
+  // bald head's face estimate, the skin of the whole head, lies nearer its centre than this
+  // stand-in 70 mm in front.)
   const Vector3d centre(0.0, -0.30, 0.66);
   const psfs::ProbabilityVolume v = volume(person(centre, 0));
-  const auto fit = fitHeadCentre(v, centre + Vector3d(0.0, 0.07, -0.04), HeadModelParams());
+  HeadModelParams axis_only;
+  axis_only.face_weight = 0.0;
+  const auto fit = fitHeadCentre(v, centre + Vector3d(0.0, 0.07, -0.04), axis_only);
   ASSERT_TRUE(fit.ok);
   EXPECT_TRUE(fit.clipped);
   const Vector3d e = fit.centre - centre;
@@ -173,6 +213,11 @@ TEST(HeadModel, ValidatesParameters) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = HeadModelParams();
   p.vertex_weight = 1.5;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = HeadModelParams();
+  p.face_weight = -0.1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.face_weight = 1.1;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = HeadModelParams();
   p.threshold = 1.0;

@@ -80,6 +80,7 @@ TEST(MpfConfig, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(c.params.head_fit.iterations, d.head_fit.iterations);
   EXPECT_EQ(c.params.head_fit.top_above_centre, d.head_fit.top_above_centre);
   EXPECT_EQ(c.params.head_fit.vertex_weight, d.head_fit.vertex_weight);
+  EXPECT_EQ(c.params.head_fit.face_weight, d.head_fit.face_weight);
   EXPECT_EQ(c.params.threads, d.threads);
   EXPECT_EQ(c.nodelet.seed, n.seed);
   EXPECT_EQ(c.nodelet.publish_particles, n.publish_particles);

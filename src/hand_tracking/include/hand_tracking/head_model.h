@@ -15,9 +15,10 @@
 //      cylinder;
 //   3. the centre's height: the vertex of a least-squares parabola through A(z) over the levels
 //      from the top down to fit_depth below it (the neck's narrowing is below that);
-//   4. the centre: the axis at a weighted mean of that height (vertex_weight) and the top
+//   4. the centre: at a weighted mean of that height (vertex_weight) and the top
 //      less top_above_centre (the vertex alone where the top is cut off by the workspace's
-//      ceiling; the top alone where the profile has no plausible vertex).
+//      ceiling; the top alone where the profile has no plausible vertex), horizontally
+//      between the axis and the face estimate (face_weight: hair pulls the axis back).
 // On generated scenarios the hull's cross-section is not an ellipse's: cameras looking down
 // leave phantom volume around the head's upper half, and the chin, neck and long hair bend
 // the profile, so the vertex scatters: -15..+65 mm from the centre on the pSfS hull, -6..+50
@@ -68,6 +69,16 @@ struct HeadModelParams {
   // 48 scenarios 0.25 with top_above_centre 0.13 looked better (head 12.8 -> 11.1 mm median),
   // but on 24 held-out ones it was not (11.4 -> 11.6 mm; docs/benchmarks.md): kept at 0.5.
   double vertex_weight = 0.5;
+  // Weight of the face estimate's horizontal position in the centre's (the blob's axis has the
+  // rest), in [0, 1]. Hair lies on top of and behind the head, so the axis (the centroid of
+  // the blob's upper part) sits behind the centre: 19 mm for the simulator's short hair on the
+  // exact hull, a median of 6 mm back (world y) over 96 generated scenarios on the pSfS hull,
+  // +3.5 mm for the bald ones. The face estimate (the skin the MPF follows) lies in front of
+  // the centre, by much more where hair covers the rest of the head and by little on a bald
+  // one, so a blend pulls a haired head forward and leaves a bald one nearly as it was.
+  // 0.25 halves the median bias (6.0 -> 3.0 mm back); 0.5 removes it but scatters more
+  // (docs/benchmarks.md, "MPF: the head's centre between the axis and the face"). 0: the axis.
+  double face_weight = 0.25;
 
   // Throws std::invalid_argument naming the field.
   void validate() const;
