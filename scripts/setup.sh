@@ -48,6 +48,9 @@ fi
 # pyenv's python3 on PATH breaks catkin and pluginlib at configure time: use Debian's.
 export PATH=/usr/bin:/bin:$PATH
 export CCACHE_DIR="${CCACHE_DIR:-$HOME/.ccache}"
+# Paths under the checkout's parent hash as relative ones, so that another clone with the same
+# layout (CI's clean clone, ../shared beside it) reuses the cache instead of rebuilding.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(dirname "$ROOT")}"
 cd "$ROOT"
 echo "[setup] building workspace in $ROOT/build (Release)"
 set +e
