@@ -9,6 +9,8 @@ bash "$ROOT/scripts/setup.sh"
 source "$ROOT/scripts/ros_env.sh"
 cd "$ROOT"
 export ROS_LOG_DIR="$ROOT/build/test_logs"
+# As setup.sh: the cache keyed on paths relative to the checkout's parent.
+export CCACHE_DIR="${CCACHE_DIR:-$HOME/.ccache}" CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(dirname "$ROOT")}"
 rm -rf build/test_results
 echo "[test] building and running the tests"
 set +e
