@@ -48,6 +48,13 @@ std::function<bool(const Vector3d&)> person(const Vector3d& c, int hair) {
   };
 }
 
+// The default parameters with the centre's x and y from the blob's axis alone (face_weight 0).
+HeadModelParams axisOnly() {
+  HeadModelParams p;
+  p.face_weight = 0.0;
+  return p;
+}
+
 }  // namespace
 
 TEST(HeadModel, FindsTheCentreFromTheFace) {
@@ -63,11 +70,9 @@ TEST(HeadModel, FindsTheCentreFromTheFace) {
   // The centre's x and y here are the axis alone (face_weight 0; the blend: next test).
   const Vector3d centre(0.03, -0.30, 0.55);
   const Vector3d face = centre + Vector3d(0.0, 0.07, -0.04);
-  HeadModelParams axis_only;
-  axis_only.face_weight = 0.0;
   for (int hair : {0, 1}) {
     const psfs::ProbabilityVolume v = volume(person(centre, hair));
-    const auto fit = fitHeadCentre(v, face, axis_only);
+    const auto fit = fitHeadCentre(v, face, axisOnly());
     ASSERT_TRUE(fit.ok) << "hair " << hair;
     EXPECT_FALSE(fit.clipped);
     EXPECT_FALSE(fit.from_top);  // the blend of vertex and top, not the top alone
@@ -90,9 +95,7 @@ TEST(HeadModel, TheFaceEstimatePullsAHairedHeadForward) {
   const Vector3d centre(0.03, -0.30, 0.55);
   const Vector3d face = centre + Vector3d(0.0, 0.07, -0.04);
   const psfs::ProbabilityVolume v = volume(person(centre, 1));
-  HeadModelParams axis_only;
-  axis_only.face_weight = 0.0;
-  const auto axis_fit = fitHeadCentre(v, face, axis_only);
+  const auto axis_fit = fitHeadCentre(v, face, axisOnly());
   const HeadModelParams blended;  // the default
   const auto fit = fitHeadCentre(v, face, blended);
   ASSERT_TRUE(axis_fit.ok);
@@ -165,9 +168,7 @@ TEST(HeadModel, HeadCutOffByTheWorkspaceCeiling) {
   // stand-in 70 mm in front.)
   const Vector3d centre(0.0, -0.30, 0.66);
   const psfs::ProbabilityVolume v = volume(person(centre, 0));
-  HeadModelParams axis_only;
-  axis_only.face_weight = 0.0;
-  const auto fit = fitHeadCentre(v, centre + Vector3d(0.0, 0.07, -0.04), axis_only);
+  const auto fit = fitHeadCentre(v, centre + Vector3d(0.0, 0.07, -0.04), axisOnly());
   ASSERT_TRUE(fit.ok);
   EXPECT_TRUE(fit.clipped);
   const Vector3d e = fit.centre - centre;

@@ -73,9 +73,9 @@ struct HeadModelParams {
   // rest), in [0, 1]. Hair lies on top of and behind the head, so the axis (the centroid of
   // the blob's upper part) sits behind the centre: 19 mm for the simulator's short hair on the
   // exact hull, a median of 6 mm back (world y) over 96 generated scenarios on the pSfS hull
-  // (3.5 mm forward for the bald ones). The face estimate (the skin the MPF follows) lies in front of
-  // the centre, by much more where hair covers the rest of the head and by little on a bald
-  // one, so a blend pulls a haired head forward and leaves a bald one nearly as it was.
+  // (3.5 mm forward for the bald ones). The face estimate (the skin the MPF follows) lies in
+  // front of the centre, by much more where hair covers the rest of the head and by little on
+  // a bald one, so a blend pulls a haired head forward and leaves a bald one nearly as it was.
   // 0.25 halves the median bias (6.0 -> 3.0 mm back); 0.5 removes it but scatters more
   // (docs/benchmarks.md, "MPF: the head's centre between the axis and the face"). 0: the axis.
   double face_weight = 0.25;
