@@ -15,6 +15,7 @@
 #include "gpu_frame_path.h"
 #include "psfs_reconstruction/cuda_device.h"
 #include "psfs_reconstruction/image_checks.h"
+#include "psfs_reconstruction/occluder_depth.h"
 #include "tabletop_capture/rig_description.h"
 
 namespace psfs {
@@ -61,6 +62,8 @@ void ReconstructorParams::validate() const {
     fail("hull_occupancy_skin must lie in (0, hull_occupancy_foreground]");
   if (!(hand_roi_edge > 0 && std::isfinite(hand_roi_edge))) fail("hand_roi_edge must be > 0");
   if (hand_roi_voxels < 2 || hand_roi_voxels > 512) fail("hand_roi_voxels must lie in [2, 512]");
+  if (!(hand_occlusion_margin >= 0 && std::isfinite(hand_occlusion_margin)))
+    fail("hand_occlusion_margin must be finite and >= 0");
   if (mask_margin_px < 0 || mask_margin_px > 50) fail("mask_margin_px must lie in [0, 50]");
   if (!(dark_camera_fraction > 0 && dark_camera_fraction <= 1))
     fail("dark_camera_fraction must lie in (0, 1]");
@@ -525,6 +528,12 @@ void Reconstructor::reconstruct(const std::vector<cv::Mat>& rgb,
   auto t0 = Clock::now();
   while (hand_tables_.size() < hand_rois.size()) hand_tables_.emplace_back();
   r.hands.resize(hand_rois.size());
+  // Known occlusions: per camera the body's distance, then per hand its masks and evidence (on
+  // the CPU, also on the GPU path: the likelihoods are on the host, and the bytes the same).
+  std::vector<cv::Mat> occluders;
+  if (params_.hand_occlusion_masks && !hand_rois.empty())
+    occluders = occluderDepths(r.body, thresholdByte(params_.body.threshold), cameras_, table_.get(),
+                               params_.threads);
   for (size_t h = 0; h < hand_rois.size(); ++h) {
     const VoxelGrid grid =
         snappedCubeGrid(hand_rois[h], params_.hand_roi_edge, params_.hand_roi_voxels);
@@ -536,10 +545,23 @@ void Reconstructor::reconstruct(const std::vector<cv::Mat>& rgb,
     } else {
       hand_tables_[h]->update(grid, cameras_);
     }
-    if (gpu)
+    if (!occluders.empty()) {
+      std::vector<ViewImage> views(n);
+      for (int i = 0; i < n; ++i) {
+        views[i].likelihood = likelihoods_[i];
+        views[i].channel = 1;
+        views[i].active = r.camera_active[i]
+                              ? frontOcclusionMask(occluders[i], cameras_[i], hand_rois[h],
+                                                   params_.hand_occlusion_margin)
+                              : cv::Mat::zeros(likelihoods_[i].size(), CV_8UC1);
+      }
+      hand_evidence_.set(views, params_.hand.multi_projection, params_.threads);
+      hand_fusion_.fuse(*hand_tables_[h], hand_evidence_, &r.hands[h]);
+    } else if (gpu) {
       gpu_->fuseHand(*hand_tables_[h], &r.hands[h]);
-    else
+    } else {
       hand_fusion_.fuse(*hand_tables_[h], skin_evidence_, &r.hands[h]);
+    }
   }
   r.times.hands = msSince(t0);
 

@@ -71,6 +71,8 @@ void addReconstructorKeys(ReconstructorConfig* c, tabletop_common::ConfigSchema*
   s->add("hand_volumes/edge", &p.hand_roi_edge)
       .add("hand_volumes/voxels", &p.hand_roi_voxels)
       .add("hand_volumes/clip_below_floor", &p.hand_roi_clip_floor)
+      .add("hand_volumes/occlusion_masks", &p.hand_occlusion_masks)
+      .add("hand_volumes/occlusion_margin", &p.hand_occlusion_margin)
       .add("hand_volumes/topic", &c->nodelet.hand_roi_topic)
       .add("hand_volumes/max_age", &c->nodelet.hand_roi_max_age)
       .add("hand_volumes/max_hands", &c->nodelet.max_hand_rois);

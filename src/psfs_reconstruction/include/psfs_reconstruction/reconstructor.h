@@ -88,6 +88,15 @@ struct ReconstructorParams {
   // in all of them and fill with its evidence: a slab of phantom skin under the hand. The hand
   // fusion skips those layers (PsfsOptions::floor_z).
   bool hand_roi_clip_floor = true;
+  // Known occlusions of the hand sub-volumes (occluder_depth.h): a camera's pixels where this
+  // set's body volume lies nearer to the camera than the hand's ROI centre by more than
+  // hand_occlusion_margin (m) give that hand no evidence (the trunk, the other arm or the head
+  // hides it there). Off: every pixel counts, and only the hand fusion's occlusion tolerance
+  // (hand.occluded_views, then 1) survives a view that sees clothing in front of the hand, at
+  // the cost of a hull fattened by the view it drops (docs/benchmarks.md, "Hand sub-volumes:
+  // known occlusions"). On the GPU backend the masked hand fusion runs on the CPU.
+  bool hand_occlusion_masks = true;
+  double hand_occlusion_margin = 0.12;
   // Selective background update after each reconstructed frame (alpha in `background`).
   bool update_background = true;
   // Extra pixels added around the back-projected body volume before it masks the update: the
@@ -122,9 +131,11 @@ struct ReconstructorParams {
     o.occluded_views = 1;
     return o;
   }
+  // No tolerated view: the hands' known occlusions are masked instead (hand_occlusion_masks;
+  // without the masks, 1 keeps a hand that the trunk hides in one view).
   static PsfsOptions defaultHand() {
     PsfsOptions o;
-    o.occluded_views = 1;
+    o.occluded_views = 0;
     return o;
   }
   // Throws std::invalid_argument naming the field.
@@ -261,6 +272,7 @@ class Reconstructor {
   std::vector<cv::Mat> likelihoods_;
   std::vector<cv::Mat> filtered_;  // this set's images after the prefilter (reused buffers)
   ViewEvidence body_evidence_, skin_evidence_;
+  ViewEvidence hand_evidence_;  // skin evidence with one hand's occlusion masks (reused)
   int learning_skips_ = 0;  // changed learning sets in a row
   ReconstructorParams::Backend active_backend_ = ReconstructorParams::Backend::kCpu;
   std::unique_ptr<GpuFramePath> gpu_;  // the GPU path while active_backend_ is kCuda
