@@ -11,6 +11,18 @@
 
 namespace psfs {
 
+int voxelCentrePixel(const VoxelGrid& grid, const tabletop_capture::CameraModel& camera, int c,
+                     const ProjectionTable* table, int x, int y, int z) {
+  if (table) {
+    const int p = PackedUV::pixelIndex(table->centre(c, x, y, z), camera.width);
+    return p < camera.width * camera.height ? p : -1;  // else not observed
+  }
+  Eigen::Vector2d px;
+  if (!camera.projectWorld(grid.centre(x, y, z), &px)) return -1;
+  const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
+  return u >= 0 && v >= 0 && u < camera.width && v < camera.height ? v * camera.width + u : -1;
+}
+
 std::vector<cv::Mat> occluderDepths(const ProbabilityVolume& volume, uint8_t threshold_byte,
                                     const std::vector<tabletop_capture::CameraModel>& cameras,
                                     const ProjectionTable* table, int threads) {
@@ -33,19 +45,9 @@ std::vector<cv::Mat> occluderDepths(const ProbabilityVolume& volume, uint8_t thr
     float* px = d.ptr<float>();
     double nearest = std::numeric_limits<double>::infinity();
     for (const Eigen::Vector3i& o : occupied) {
-      const Eigen::Vector3d p = g.centre(o.x(), o.y(), o.z());
-      const double dist = (p - cam.center()).norm();
-      int idx;
-      if (use_table) {
-        idx = PackedUV::pixelIndex(table->centre(c, o.x(), o.y(), o.z()), cam.width);
-        if (idx >= cam.width * cam.height) continue;  // not observed
-      } else {
-        Eigen::Vector2d uv;
-        if (!cam.projectWorld(p, &uv)) continue;
-        const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
-        if (u < 0 || v < 0 || u >= cam.width || v >= cam.height) continue;
-        idx = v * cam.width + u;
-      }
+      const int idx = voxelCentrePixel(g, cam, c, use_table ? table : nullptr, o.x(), o.y(), o.z());
+      if (idx < 0) continue;
+      const double dist = (g.centre(o.x(), o.y(), o.z()) - cam.center()).norm();
       px[idx] = std::min(px[idx], static_cast<float>(dist));
       nearest = std::min(nearest, dist);
     }

@@ -602,16 +602,9 @@ std::vector<cv::Mat> Reconstructor::backProject(const ProbabilityVolume& volume,
     // Each voxel is drawn as its centre pixel, then the mask is dilated by the footprint of a
     // voxel (half its diagonal) at the nearest distance of the grid to this camera, plus margin.
     for (const Eigen::Vector3i& o : occupied) {
-      const int x = o.x(), y = o.y(), z = o.z();
-      if (use_table) {  // the stored projections: no lens model per voxel
-        const int p = PackedUV::pixelIndex(table_->centre(c, x, y, z), cam.width);
-        if (p < cam.width * cam.height) m.data[p] = 255;
-        continue;
-      }
-      Eigen::Vector2d px;
-      if (!cam.projectWorld(g.centre(x, y, z), &px)) continue;
-      const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
-      if (u >= 0 && v >= 0 && u < cam.width && v < cam.height) m.at<uint8_t>(v, u) = 255;
+      // The stored projections when they fit: no lens model per voxel.
+      const int p = voxelCentrePixel(g, cam, c, use_table ? table_.get() : nullptr, o.x(), o.y(), o.z());
+      if (p >= 0) m.data[p] = 255;
     }
     const double half_diag = 0.5 * std::sqrt(3.0) * g.voxel_size;
     const double grid_radius = 0.5 * g.voxel_size * g.dims.cast<double>().norm();

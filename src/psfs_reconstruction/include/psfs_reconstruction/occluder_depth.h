@@ -21,6 +21,13 @@
 
 namespace psfs {
 
+// Pixel index (v * width + u) of voxel (x, y, z)'s centre in camera c, or -1 where it does not
+// project into the camera's image: from `table` when given (a precomputed table of `grid` and
+// the cameras; no lens model per voxel), else through the camera model, rounded to the nearest
+// pixel. Shared with Reconstructor::backProject, which draws the body volume the same way.
+int voxelCentrePixel(const VoxelGrid& grid, const tabletop_capture::CameraModel& camera, int c,
+                     const ProjectionTable* table, int x, int y, int z);
+
 // Per camera a CV_32F image of the distance (m) from the camera's centre to the nearest voxel of
 // `volume` above `threshold_byte` whose footprint covers the pixel; +infinity where none does.
 // Each voxel centre is drawn at its pixel, then spread by a min filter as wide as a voxel's
