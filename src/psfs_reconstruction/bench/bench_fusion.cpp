@@ -20,7 +20,9 @@
 #include "psfs_reconstruction/binary_sfs.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/simd_dispatch.h"
+#include "psfs_reconstruction/reconstructor.h"
 #include "tabletop_capture/default_rig.h"
+#include "tabletop_sim/simulated_rig.h"
 
 namespace psfs {
 namespace {
@@ -255,27 +257,122 @@ void BM_PsfsMultiWithEvidence(benchmark::State& st) {
 }
 BENCHMARK(BM_PsfsMultiWithEvidence)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// The multi-projection with empty-space skipping (PsfsOptions::skip_empty_below = range(1), in
+// percent; issue 17), the bound's per-frame tiles included; range(2) = 1 also sets the
+// evidence in the loop (the partner of BM_PsfsMultiWithEvidence).
+void BM_PsfsSkipEmpty(benchmark::State& st) {
+  Workload& w = workload();
+  const ProjectionTable table = multiTable16(w);
+  PsfsOptions o = multiOptions(static_cast<int>(st.range(0)));
+  o.skip_empty_below = double(st.range(1)) / 100.0;
+  const PsfsFusion fusion(o);
+  ViewEvidence ev;
+  ev.set(w.views, true, o.threads);
+  ProbabilityVolume out;
+  fusion.fuse(table, ev, &out);  // the bound's cells: once per table, not per frame
+  for (auto _ : st) {
+    if (st.range(2)) ev.set(w.views, true, o.threads);
+    fusion.fuse(table, ev, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  st.counters["rows_skipped"] = fusion.lastSkippedFraction();
+  st.counters["voxels_in"] = static_cast<double>(countAbove(out, thresholdByte(o.threshold)));
+  st.SetLabel(table.grid().describe() + ", multi-projection, empty space skipped" +
+              (st.range(2) ? " + evidence" : "") + (avx512KernelsActive() ? ", AVX-512" : ", AVX2"));
+}
+BENCHMARK(BM_PsfsSkipEmpty)
+    ->ArgsProduct({{1, 2}, {50}, {0, 1}})
+    ->ArgNames({"threads", "below_pct", "evidence"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// The real pipeline's likelihoods (the simulated rig's default scenario, 'wave', the background
+// learned from 25 sets, the classifier as shipped): frame 60, body (channel 0) and skin
+// (channel 1). range(0): 0 body, 1 skin; range(1): skip_empty_below in percent (0 = off), with
+// the body and skin options as ReconstructorParams has them otherwise; range(2): threads.
+struct PipelineFrame {
+  std::vector<tabletop_capture::CameraModel> cameras;
+  std::vector<ViewImage> views[2];
+  ViewEvidence evidence[2], single;
+  PipelineFrame() {
+    tabletop_sim::SimOptions so;
+    so.script = "wave";
+    so.empty_frames = 25;
+    const tabletop_sim::SimulatedRig rig(so);
+    cameras = rig.rig().cameras;
+    ReconstructorParams params;
+    Reconstructor r(GaussianMixture2D::load(PSFS_BENCH_CONFIG_DIR "/skin_gmm.yaml"), params);
+    for (int f = 0; f < 25; ++f) r.process(rig.render(f).images, cameras);
+    r.process(rig.render(60).images, cameras);
+    for (int k = 0; k < 2; ++k) {
+      for (const cv::Mat& l : r.lastLikelihoods()) views[k].push_back(ViewImage{l.clone(), k, cv::Mat()});
+      evidence[k].set(views[k], true);
+    }
+    single.set(views[0], false);
+  }
+};
+PipelineFrame& pipelineFrame() {
+  static PipelineFrame f;
+  return f;
+}
+
+void BM_PsfsPipelineFrame(benchmark::State& st) {
+  PipelineFrame& w = pipelineFrame();
+  const int kind = static_cast<int>(st.range(0));
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(referenceGrid(Resolution::k16mm), w.cameras, to);
+  PsfsOptions o = kind ? ReconstructorParams::defaultSkin() : ReconstructorParams::defaultBody();
+  o.skip_empty_below = double(st.range(1)) / 100.0;
+  o.threads = static_cast<int>(st.range(2));
+  const PsfsFusion fusion(o);
+  ProbabilityVolume out;
+  fusion.fuse(table, w.evidence[kind], &out);  // the bound's cells: once per table
+  for (auto _ : st) {
+    fusion.fuse(table, w.evidence[kind], &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  st.counters["rows_skipped"] = fusion.lastSkippedFraction();
+  st.SetLabel(std::string(kind ? "skin" : "body") + ", default scenario frame 60, multi-projection" +
+              (avx512KernelsActive() ? ", AVX-512" : ", AVX2"));
+}
+BENCHMARK(BM_PsfsPipelineFrame)
+    ->ArgsProduct({{0, 1}, {0, 50}, {1, 2}})
+    ->ArgNames({"skin", "below_pct", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
 // Binary SfS baseline on the same tables (carving only; silhouettes set once: thresholding
 // the 8 images is the image part, timed in BM_BinarySilhouettes).
-void BM_Binary(benchmark::State& st) {
-  Workload& w = workload();
-  const int res = static_cast<int>(st.range(0));
-  const ProjectionTable table(gridFor(res), w.rig.cameras);
+void carveLoop(benchmark::State& st, const ProjectionTable& table, const ViewEvidence& single, int threads) {
   BinarySfsOptions o;
-  o.threads = static_cast<int>(st.range(1));
+  o.threads = threads;
   BinarySfs bin(o);
-  bin.setSilhouettes(w.single);
+  bin.setSilhouettes(single);
   ProbabilityVolume out;
   for (auto _ : st) {
     bin.carve(table, &out);
     benchmark::DoNotOptimize(out.data.data());
   }
   st.counters["voxels_in"] = static_cast<double>(countAbove(out, 0));
+}
+
+void BM_Binary(benchmark::State& st) {
+  Workload& w = workload();
+  const int res = static_cast<int>(st.range(0));
+  const ProjectionTable table(gridFor(res), w.rig.cameras);
+  carveLoop(st, table, w.single, static_cast<int>(st.range(1)));
   st.SetLabel(table.grid().describe() + (table.precomputed() ? ", stored table" : ", projected on the fly"));
 }
 BENCHMARK(BM_Binary)
     ->ArgsProduct({{16, 8}, {1, 2}})->Args({4, 1})->Args({4, 2})
     ->ArgNames({"mm", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Binary SfS on the same frame's body likelihoods (carving stops at the first camera that sees
+// background, so its cost depends on the scene too).
+void BM_BinaryPipelineFrame(benchmark::State& st) {
+  PipelineFrame& w = pipelineFrame();
+  carveLoop(st, ProjectionTable(referenceGrid(Resolution::k16mm), w.cameras), w.single,
+            static_cast<int>(st.range(0)));
+  st.SetLabel("body, default scenario frame 60");
+}
+BENCHMARK(BM_BinaryPipelineFrame)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_BinarySilhouettes(benchmark::State& st) {
   Workload& w = workload();

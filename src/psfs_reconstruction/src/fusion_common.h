@@ -75,9 +75,14 @@ void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& 
 // its projections for a table projected on the fly). Slabs are at least 2 layers deep, so a
 // grid of nz layers uses at most nz / 2 threads.
 // fn(row, centres, offsets, yface, zface) with the buffers as the face kernels take them.
-template <class Fn>
+// skip (optional, one flag per row): rows flagged 1 are not fused but handed to skip_fn(row);
+// the faces a computed row needs from a skipped neighbour (the row before it in y, the same
+// row in the layer below) are sampled with plusFacesOfRow first, so a computed row is the same
+// bytes whatever is skipped. With skip, a slab's first layer also takes the faces from below
+// only for the rows it computes.
+template <class Fn, class SkipFn>
 void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>& views,
-                    int threads, const Fn& fn) {
+                    int threads, const Fn& fn, const uint8_t* skip, const SkipFn& skip_fn) {
   const int ny = table.grid().dims.y(), nz = table.grid().dims.z();
   const int nxp = table.paddedRowLength(), C = table.numCameras();
   const size_t row_faces = size_t(C) * nxp;
@@ -90,28 +95,50 @@ void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>&
     std::vector<uint32_t> os(table.precomputed() ? 0 : table.offsetScratchSize());
     // + 16: the vector kernels read whole vectors past the last camera's row.
     std::vector<uint16_t> yface(row_faces + 16), zface(row_faces * ny + 16);
+    std::vector<uint8_t> zface_ok(size_t(ny), 1);  // the slot holds the layer below's + z faces
+    auto plusFaces = [&](size_t r, int axis, uint16_t* faces) {
+      plusFacesOfRow(views.data(), C, nxp, table.rowCentres(r, cs.data()), table.rowOffsets(r, os.data()),
+                     axis, faces);
+    };
 #pragma omp for schedule(dynamic, 1)
     for (int sl = 0; sl < slabs; ++sl) {
       const int z0 = sl * depth, z1 = std::min(nz, z0 + depth);
       if (z0 == 0) {
         std::fill(zface.begin(), zface.end(), kNoFace);
+        std::fill(zface_ok.begin(), zface_ok.end(), uint8_t(1));
+      } else if (skip) {
+        std::fill(zface_ok.begin(), zface_ok.end(), uint8_t(0));
       } else {
-        for (int y = 0; y < ny; ++y) {
-          const size_t r = size_t(y) + size_t(ny) * (z0 - 1);
-          plusFacesOfRow(views.data(), C, nxp, table.rowCentres(r, cs.data()),
-                         table.rowOffsets(r, os.data()), 2, &zface[size_t(y) * row_faces]);
-        }
+        for (int y = 0; y < ny; ++y)
+          plusFaces(size_t(y) + size_t(ny) * (z0 - 1), 2, &zface[size_t(y) * row_faces]);
       }
       for (int z = z0; z < z1; ++z) {
         std::fill(yface.begin(), yface.end(), kNoFace);
+        bool yface_ok = true;
         for (int y = 0; y < ny; ++y) {
           const size_t r = size_t(y) + size_t(ny) * z;
+          if (skip && skip[r]) {
+            skip_fn(r);
+            yface_ok = false;
+            zface_ok[size_t(y)] = 0;
+            continue;
+          }
+          if (!yface_ok) plusFaces(r - 1, 1, yface.data());
+          if (!zface_ok[size_t(y)]) plusFaces(r - size_t(ny), 2, &zface[size_t(y) * row_faces]);
+          yface_ok = true;
+          zface_ok[size_t(y)] = 1;
           fn(r, table.rowCentres(r, cs.data()), table.rowOffsets(r, os.data()), yface.data(),
              &zface[size_t(y) * row_faces]);
         }
       }
     }
   }
+}
+
+template <class Fn>
+void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>& views,
+                    int threads, const Fn& fn) {
+  forEachFaceRow(table, views, threads, fn, nullptr, [](size_t) {});
 }
 
 inline std::vector<KernelView> kernelViews(const ViewEvidence& e) {

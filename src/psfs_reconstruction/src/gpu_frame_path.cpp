@@ -62,13 +62,25 @@ void GpuFramePath::buildEvidence(const std::vector<bool>& camera_active,
     active[i] = off;
   }
   pixels_.buildEvidence(active, body_bilinear_, skin_bilinear_, with_skin);
+  // The bounds of the CPU path's skipping, from the same likelihoods and masks.
+  for (int kind = 0; kind < (with_skin ? 2 : 1); ++kind) {
+    const PsfsOptions& o = (kind ? skin_ : body_).options();
+    if (!o.multi_projection || o.skip_empty_below <= 0.0) continue;
+    std::vector<ViewImage> views(likelihoods.size());
+    for (size_t i = 0; i < views.size(); ++i) views[i] = ViewImage{likelihoods[i], kind, active[i]};
+    detail::tileMaxImages(views, o.threads, &(kind ? skin_skip_ : body_skip_).tiles);
+  }
 }
 
 void GpuFramePath::fuseBody(const ProjectionTable& table, ProbabilityVolume* out) {
   body_.fuse(table, pixels_.bodyEvidence(), out);
+  if (body_.options().multi_projection && body_.options().skip_empty_below > 0.0)
+    detail::fillSkippedRows(body_.options(), table, &body_skip_, out);
 }
 void GpuFramePath::fuseSkin(const ProjectionTable& table, ProbabilityVolume* out) {
   skin_.fuse(table, pixels_.skinEvidence(), out);
+  if (skin_.options().multi_projection && skin_.options().skip_empty_below > 0.0)
+    detail::fillSkippedRows(skin_.options(), table, &skin_skip_, out);
 }
 void GpuFramePath::fuseHand(const ProjectionTable& table, ProbabilityVolume* out) {
   hand_.fuse(table, pixels_.skinEvidence(), out);

@@ -15,6 +15,7 @@
 #include "psfs_reconstruction/gpu_pixel_stage.h"
 #include "psfs_reconstruction/gpu_psfs_fusion.h"
 #include "psfs_reconstruction/reconstructor.h"
+#include "empty_space_bound.h"
 
 namespace psfs {
 
@@ -57,6 +58,9 @@ class GpuFramePath {
   GpuPsfsFusion body_, skin_, hand_;
   bool body_bilinear_, skin_bilinear_;
   std::vector<cv::Mat> off_masks_;   // all-zero masks of switched-off views, kept per camera
+  // Empty-space skipping (PsfsOptions::skip_empty_below): the device fuses every row; the rows
+  // the CPU path skips are set to its fill from the host likelihoods' bounds.
+  detail::EmptySkipCache body_skip_, skin_skip_;
   bool device_current_ = false;      // the device holds the host's models (or newer ones)
   bool device_newer_ = false;        // the device updated them since they were uploaded
 };

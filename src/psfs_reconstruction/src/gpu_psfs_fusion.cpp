@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "empty_space_bound.h"
 #include "fusion_common.h"
 #include "psfs_reconstruction/cuda_device.h"
 #include "volume_fusion.h"
@@ -52,6 +53,7 @@ std::vector<detail::HostEvidenceView> hostViews(const ViewEvidence& evidence, bo
 // The device backend (created with the first frame) and what the device's table was made from.
 struct GpuPsfsFusion::Impl {
   std::unique_ptr<detail::CudaVolumeFusion> backend;
+  detail::EmptySkipCache skip;  // PsfsOptions::skip_empty_below: what PsfsFusion skips
   bool table_valid = false;
   VoxelGrid grid;
   bool multi = false, precomputed = false;
@@ -147,6 +149,10 @@ void GpuPsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evide
   detail::checkFootprint(table, evidence, options_.footprint, kWho);
   const std::vector<detail::HostEvidenceView> views = hostViews(evidence, options_.multi_projection);
   run(table, views.data(), nullptr, out);
+  if (options_.multi_projection && options_.skip_empty_below > 0.0) {  // the device fused every row: fill PsfsFusion's skipped ones
+    detail::tileMaxImages(evidence, options_.threads, &impl_->skip.tiles);
+    detail::fillSkippedRows(options_, table, &impl_->skip, out);
+  }
 }
 
 void GpuPsfsFusion::fuse(const ProjectionTable& table, const GpuEvidence& evidence, ProbabilityVolume* out) {

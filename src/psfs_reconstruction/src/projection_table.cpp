@@ -1,6 +1,7 @@
 #include "psfs_reconstruction/projection_table.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cfloat>
 #include <cmath>
 #include <stdexcept>
@@ -272,6 +273,8 @@ void ProjectionTable::checkFootprintRows(const std::vector<Camera>& cams) const 
 }
 
 void ProjectionTable::build() {
+  static std::atomic<uint64_t> builds{0};
+  revision_ = ++builds;
   nxp_ = (grid_.dims.x() + kChunk - 1) / kChunk * kChunk;
   const size_t bytes = precomputedBytes(grid_, numCameras(), options_.multi_projection);
   precomputed_ = options_.storage == TableStorage::kPrecomputed ||

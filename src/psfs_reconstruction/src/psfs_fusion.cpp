@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "cpu_dispatch.h"
+#include "empty_space_bound.h"
 #include "fusion_common.h"
 #include "psfs_kernels.h"
 #include "volume_fusion.h"
@@ -94,6 +96,14 @@ PsfsFusion::PsfsFusion(const PsfsOptions& o) : options_(o) {
     throw std::invalid_argument("psfs::PsfsOptions: footprint and multi_projection are exclusive");
   if (std::isnan(o.floor_z) || o.floor_z == std::numeric_limits<double>::infinity())
     throw std::invalid_argument("psfs::PsfsOptions: floor_z must be a height or -infinity");
+  if (!std::isfinite(o.skip_empty_below) || o.skip_empty_below < 0.0 || !(o.skip_empty_below < o.threshold))
+    throw std::invalid_argument("psfs::PsfsOptions: skip_empty_below must be in [0, threshold)");
+  skip_ = std::make_shared<detail::EmptySkipCache>();
+}
+
+double PsfsFusion::lastSkippedFraction() const {
+  std::lock_guard<std::mutex> lock(skip_->mutex);
+  return skip_->last_fraction;
 }
 
 void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence,
@@ -114,11 +124,20 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
   const size_t first_row = size_t(p.first_layer) * size_t(out->grid.dims.y());
   if (options_.multi_projection) {
     const detail::PsfsFaceRowFn face_fn = detail::selectPsfsFaceRow(options_.occluded_views, vector);
-    detail::forEachFaceRow(table, views, options_.threads,
-                           [&](size_t r, const uint32_t* centres, const uint32_t* offsets,
-                               uint16_t* yface, uint16_t* zface) {
-                             face_fn(p, centres, offsets, yface, zface, dst + r * p.nx);
-                           });
+    std::vector<uint8_t> skip;
+    std::unique_lock<std::mutex> lock;  // held through the fusion: skipped rows read the bound
+    if (options_.skip_empty_below > 0.0) {  // (this branch is the multi-projection's)
+      lock = std::unique_lock<std::mutex>(skip_->mutex);
+      detail::tileMaxImages(evidence, options_.threads, &skip_->tiles);
+      detail::skippedRows(options_, table, skip_.get(), &skip);
+    }
+    detail::forEachFaceRow(
+        table, views, options_.threads,
+        [&](size_t r, const uint32_t* centres, const uint32_t* offsets, uint16_t* yface, uint16_t* zface) {
+          face_fn(p, centres, offsets, yface, zface, dst + r * p.nx);
+        },
+        skip.empty() ? nullptr : skip.data(),
+        [&](size_t r) { skip_->bound.fillRow(r, skip_->fill, p.min_views, skip_->absent, dst + r * p.nx); });
   } else {
     const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
     detail::forEachRow(

@@ -73,6 +73,9 @@ void ReconstructorParams::validate() const {
     fail("saturated_warning_fraction must lie in (0, 1]");
   if (threads < 0) fail("threads must be >= 0");
   if (hand.footprint) fail("hand.footprint is not supported (hand tables are projected on the fly)");
+  if (hand.skip_empty_below != 0.0)
+    fail("hand.skip_empty_below is not supported (it is for the workspace volumes: a hand's cube is "
+         "projected anew every frame, and most of it is the hand)");
   if (body.footprint != skin.footprint)
     fail("body.footprint and skin.footprint must agree (one shared workspace table)");
   for (const FootprintFilter* f : {&body_footprint, &skin_footprint})

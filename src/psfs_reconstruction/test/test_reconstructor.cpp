@@ -672,6 +672,7 @@ void expectSameFusion(const PsfsOptions& a, const PsfsOptions& b, const char* wh
   EXPECT_EQ(a.min_views, b.min_views) << what;
   EXPECT_EQ(a.multi_projection, b.multi_projection) << what;
   EXPECT_EQ(a.footprint, b.footprint) << what;
+  EXPECT_EQ(a.skip_empty_below, b.skip_empty_below) << what;
 }
 
 // config/psfs.yaml documents the defaults: it must say what the code does.

@@ -61,7 +61,10 @@ class GpuPsfsFusion {
   // Throws std::runtime_error when no device is usable or on a CUDA error (then fall back).
   void fuse(const ProjectionTable& table, const ViewEvidence& evidence, ProbabilityVolume* out);
   // The same with the evidence already in device memory (gpu_evidence.h), one view per camera;
-  // its writer must have finished (its stream synchronised). Multi-projection needs the pair
+  // its writer must have finished (its stream synchronised). With PsfsOptions::skip_empty_below
+  // this fuses every row (the device has no host copy of the likelihoods to bound them): the
+  // caller sets the rows PsfsFusion skips to its fill from its host views (GpuFramePath does),
+  // so the bytes agree. Multi-projection needs the pair
   // images, footprint tables evidence with their levels (not checkable here: the caller's).
   void fuse(const ProjectionTable& table, const GpuEvidence& evidence, ProbabilityVolume* out);
 

@@ -138,6 +138,9 @@ class ProjectionTable {
     return static_cast<int>(packed >> (16 + PackedUV::kFracBits)) / (cameras_[c].proj.height + 1);
   }
   size_t memoryBytes() const;  // stored projections (0 when on the fly)
+  // Changes with every (re)build, unique within the process (0: never built): what a cache of
+  // anything derived from the table's projections compares (EmptySpaceBound).
+  uint64_t revision() const { return revision_; }
   // What a precomputed table of this grid and these options would take.
   static size_t precomputedBytes(const VoxelGrid& grid, int num_cameras, bool multi_projection);
 
@@ -188,6 +191,7 @@ class ProjectionTable {
   std::vector<Camera> cameras_;
   int nxp_ = 0;
   bool precomputed_ = false;
+  uint64_t revision_ = 0;
   std::vector<uint32_t, detail::UninitAllocator<uint32_t>> centres_;  // [row][camera][x]
   std::vector<uint32_t, detail::UninitAllocator<uint32_t>> offsets_;  // [row][camera][chunk][axis]
 };

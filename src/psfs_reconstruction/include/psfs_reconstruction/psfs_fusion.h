@@ -55,6 +55,7 @@
 #pragma once
 
 #include <limits>
+#include <memory>
 
 #include "psfs_reconstruction/probability_volume.h"
 #include "psfs_reconstruction/projection_table.h"
@@ -102,8 +103,21 @@ struct PsfsOptions {
   // them (it carries the faces from layer to layer). On a GPU no thread below fuses, but an
   // on-the-fly table is still projected whole.
   double floor_z = -std::numeric_limits<double>::infinity();
+  // Empty-space skipping of the multi-projection test (the single-projection and footprint
+  // paths ignore it; 0 = off), in [0, threshold): grid rows whose
+  // voxels a bound of the posterior (from the largest 2x2 minimum of the likelihood in the 8x8
+  // pixel tiles around their footprints) puts below this level are not fused but set to the
+  // background's posterior (every camera's commonest likelihood, fused: what empty space far
+  // from the person is). Every voxel at or above the level (the hull included) keeps its byte;
+  // only a structure under 2 px wide in a view could be lost. src/empty_space_bound.h
+  // explains the bound; docs/benchmarks.md has the cost and the trackers' figures.
+  double skip_empty_below = 0.0;
   int threads = 0;                 // OpenMP threads (0 = OpenMP default)
 };
+
+namespace detail {
+struct EmptySkipCache;
+}
 
 class PsfsFusion {
  public:
@@ -115,9 +129,14 @@ class PsfsFusion {
   // Throws std::invalid_argument if the evidence does not match the table (number of views,
   // image sizes) or lacks what the options need (multi-projection).
   void fuse(const ProjectionTable& table, const ViewEvidence& evidence, ProbabilityVolume* out) const;
+  // Fraction of the grid's rows the last fuse skipped (PsfsOptions::skip_empty_below; 0 without).
+  double lastSkippedFraction() const;
 
  private:
   PsfsOptions options_;
+  // The empty-space bound's per-table cells and the last frame's figure (shared by copies,
+  // guarded by its mutex: fuse is const and may run on several threads).
+  std::shared_ptr<detail::EmptySkipCache> skip_;
 };
 
 }  // namespace psfs

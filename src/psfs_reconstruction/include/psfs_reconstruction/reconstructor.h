@@ -120,15 +120,21 @@ struct ReconstructorParams {
   enum class Backend { kCpu, kCuda };
   Backend backend = Backend::kCpu;
 
+  // Empty space skipped below 0.5 (PsfsOptions::skip_empty_below): the hull and every voxel
+  // at or above 0.5 as without it, at about 0.6 of the multi-projection's cost on the default
+  // rig; the trackers' figures over 96 generated scenarios unchanged in their medians
+  // (docs/benchmarks.md, "pSfS: empty-space skipping in the multi-projection test").
   static PsfsOptions defaultBody() {
     PsfsOptions o;
     o.multi_projection = true;
+    o.skip_empty_below = 0.5;
     return o;
   }
   static PsfsOptions defaultSkin() {
     PsfsOptions o;
     o.multi_projection = true;
     o.occluded_views = 1;
+    o.skip_empty_below = 0.5;
     return o;
   }
   // No tolerated view: the hands' known occlusions are masked instead (hand_occlusion_masks;

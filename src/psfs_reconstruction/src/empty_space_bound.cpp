@@ -1,0 +1,357 @@
+#include "empty_space_bound.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "cpu_dispatch.h"
+#include "volume_fusion.h"
+
+namespace psfs {
+namespace detail {
+namespace {
+
+// Pixels added around a cell's sample box: 1 for the bilinear neighbour, 1 for the rounding of
+// a face sampled from the other voxel's offsets (another chunk's, a fraction of a pixel apart),
+// 1 to spare.
+constexpr int kMarginPx = 3;
+// Fixed-point units added to each camera's bound: the log polynomial's rounding (< 1 unit).
+constexpr int32_t kTermMargin = 2;
+constexpr int kMaxBoundCameras = 64;
+
+// The bound's log term of a byte: the log term of the largest median pair that 6 samples of
+// bytes <= b can give (2 * 256 * b), plus the margin, at most 0.
+const std::vector<int32_t>& byteBounds() {
+  static const std::vector<int32_t> table = [] {
+    std::vector<int32_t> t(256);
+    for (int b = 0; b < 256; ++b) t[size_t(b)] = std::min<int32_t>(0, logTermOfPair(2 * 256 * b) + kTermMargin);
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
+void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t stride, const cv::Mat& active,
+                       const int16_t* terms) {
+  tiles_x = (width + kTile - 1) / kTile;
+  tiles_y = (height + kTile - 1) / kTile;
+  const size_t nt = size_t(tiles_x) * tiles_y;
+  for (auto& b : bound) b.assign(nt, 0);
+  row_min_.resize(size_t(width));
+  col_max_.resize(size_t(width));
+  size_t off_tiles = 0;
+  int histogram[256] = {0};
+  for (int v = 0; v < height; v += 2) {  // every 2nd row is plenty for the commonest byte
+    const uint8_t* r = likelihood + size_t(v) * stride;
+    for (int u = 0; u < width; ++u) ++histogram[r[u]];
+  }
+  mode = uint8_t(std::max_element(histogram, histogram + 256) - histogram);
+  const std::vector<int32_t>& term = byteBounds();
+  std::vector<uint8_t> off(static_cast<size_t>(tiles_x));
+  for (int ty = 0; ty < tiles_y; ++ty) {
+    std::fill(col_max_.begin(), col_max_.end(), uint8_t(0));
+    std::fill(off.begin(), off.end(), uint8_t(0));
+    for (int v = ty * kTile; v < std::min(height, (ty + 1) * kTile); ++v) {
+      const uint8_t* __restrict r0 = likelihood + size_t(v) * stride;
+      const uint8_t* __restrict r1 = likelihood + size_t(std::min(v + 1, height - 1)) * stride;
+      uint8_t* __restrict mn = row_min_.data();
+      uint8_t* __restrict mx = col_max_.data();
+      // The 2x2 minimum (right and lower neighbours, replicated at the border): one pixel or a
+      // one-pixel line of noise does not raise it.
+      for (int u = 0; u + 1 < width; ++u) {
+        const uint8_t a = r0[u] < r0[u + 1] ? r0[u] : r0[u + 1];
+        const uint8_t b = r1[u] < r1[u + 1] ? r1[u] : r1[u + 1];
+        mn[u] = a < b ? a : b;
+      }
+      mn[width - 1] = std::min(r0[width - 1], r1[width - 1]);
+      for (int u = 0; u < width; ++u) mx[u] = mx[u] > mn[u] ? mx[u] : mn[u];
+      if (!active.empty()) {
+        const uint8_t* a = active.ptr<uint8_t>(v);
+        for (int u = 0; u < width; ++u) off[size_t(u / kTile)] |= a[u] == 0;
+      } else if (terms) {
+        const int16_t* tr = terms + size_t(v) * width;
+        for (int u = 0; u < width; ++u) off[size_t(u / kTile)] |= tr[u] > 0;
+      }
+    }
+    for (int tx = 0; tx < tiles_x; ++tx) {
+      uint8_t m = 0;
+      for (int u = tx * kTile; u < std::min(width, (tx + 1) * kTile); ++u) m = std::max(m, col_max_[size_t(u)]);
+      bound[0][size_t(ty) * tiles_x + tx] = off[size_t(tx)] ? kInactive : term[m];
+      off_tiles += off[size_t(tx)];
+    }
+  }
+  // A view switched off as a whole (a dark or missing camera) observes nothing.
+  absent = false;
+  if (off_tiles == nt) {
+    size_t off_pixels = 0;
+    for (int v = 0; v < height; ++v)
+      for (int u = 0; u < width; ++u)
+        off_pixels += !active.empty() ? active.ptr<uint8_t>(v)[u] == 0 : terms[size_t(v) * width + u] > 0;
+    absent = off_pixels == size_t(width) * height;
+  }
+  for (int l = 1; l < kLevels; ++l) {
+    const int h = 1 << (l - 1);  // the squares of level l - 1 that make one of level l
+    const std::vector<int32_t>& src = bound[l - 1];
+    std::vector<int32_t>& dst = bound[l];
+    for (int ty = 0; ty < tiles_y; ++ty)
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        const int tx2 = std::min(tx + h, tiles_x - 1), ty2 = std::min(ty + h, tiles_y - 1);
+        dst[size_t(ty) * tiles_x + tx] =
+            std::max(std::max(src[size_t(ty) * tiles_x + tx], src[size_t(ty) * tiles_x + tx2]),
+                     std::max(src[size_t(ty2) * tiles_x + tx], src[size_t(ty2) * tiles_x + tx2]));
+      }
+  }
+}
+
+int32_t TileMaxImage::rectMax(int tx0, int ty0, int tx1, int ty1) const {
+  const int side = std::min(tx1 - tx0, ty1 - ty0) + 1;
+  const int l = side >= 4 ? 2 : side >= 2 ? 1 : 0;
+  const int s = 1 << l;
+  const std::vector<int32_t>& b = bound[l];
+  int32_t m = std::numeric_limits<int32_t>::min();
+  for (int y = ty0;; y += s) {
+    const int yy = std::min(y, ty1 - s + 1);
+    for (int x = tx0;; x += s) {
+      const int xx = std::min(x, tx1 - s + 1);
+      m = std::max(m, b[size_t(yy) * tiles_x + xx]);
+      if (xx == tx1 - s + 1) break;
+    }
+    if (yy == ty1 - s + 1) break;
+  }
+  return m;
+}
+
+void tileMaxImages(const ViewEvidence& evidence, int threads, std::vector<TileMaxImage>* out) {
+  const int n = evidence.numViews();
+  out->resize(size_t(n));
+#pragma omp parallel for num_threads(resolveThreads(threads)) schedule(dynamic, 1)
+  for (int c = 0; c < n; ++c) {
+    const int w = evidence.width(c), h = evidence.height(c);
+    (*out)[size_t(c)].set(evidence.likelihood(c), w, h, size_t(w), cv::Mat(),
+                          evidence.hasInactivePixels(c) ? evidence.terms(c) : nullptr);
+  }
+}
+
+void tileMaxImages(const std::vector<ViewImage>& views, int threads, std::vector<TileMaxImage>* out) {
+  const int n = int(views.size());
+  out->resize(size_t(n));
+#pragma omp parallel for num_threads(resolveThreads(threads)) schedule(dynamic, 1)
+  for (int c = 0; c < n; ++c) {
+    const ViewImage& v = views[size_t(c)];
+    cv::Mat bytes;
+    if (v.likelihood.channels() == 1)
+      bytes = v.likelihood.isContinuous() ? v.likelihood : v.likelihood.clone();
+    else
+      cv::extractChannel(v.likelihood, bytes, v.channel);
+    (*out)[size_t(c)].set(bytes.data, bytes.cols, bytes.rows, bytes.step[0], v.active);
+  }
+}
+
+double skippedRows(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
+                   std::vector<uint8_t>* rows) {
+  cache->bound.prepare(table);
+  const PsfsRowParams p = psfsRowParams(o, table);
+  size_t n = cache->bound.skippableRows(cache->tiles, p, o.occluded_views, o.skip_empty_below, rows);
+  const size_t floor_rows = std::min(rows->size(), size_t(p.first_layer) * size_t(table.grid().dims.y()));
+  for (size_t r = 0; r < floor_rows; ++r) n -= (*rows)[r], (*rows)[r] = 0;
+  cache->last_fraction = rows->empty() ? 0.0 : double(n) / double(rows->size());
+  cache->absent = 0;
+  for (size_t c = 0; c < cache->tiles.size(); ++c)
+    if (cache->tiles[c].absent) cache->absent |= uint64_t(1) << c;
+  // The fill: every observing camera's commonest byte, fused as a voxel would be (the same
+  // finalise, so the same byte on every path), capped at the level's byte.
+  int32_t sum = 0, views = 0;
+  for (const TileMaxImage& t : cache->tiles)
+    if (!t.absent) sum += logTermOfPair(2 * 256 * int32_t(t.mode)), ++views;
+  PsfsRowParams fp = p;
+  fp.exp_table = psfsExpTable();
+  const uint8_t fused = views > 0 ? finalise(fp, sum, views, nullptr, 0) : uint8_t(0);
+  cache->fill = std::min<uint8_t>(fused, uint8_t(std::floor(o.skip_empty_below * 255.0)));
+  return cache->last_fraction;
+}
+
+void fillSkippedRows(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
+                     ProbabilityVolume* out) {
+  std::vector<uint8_t> rows;
+  skippedRows(o, table, cache, &rows);
+  const size_t nx = size_t(table.grid().dims.x());
+  for (size_t r = 0; r < rows.size(); ++r)
+    if (rows[r]) cache->bound.fillRow(r, cache->fill, o.min_views, cache->absent, out->data.data() + r * nx);
+}
+
+void EmptySpaceBound::prepare(const ProjectionTable& table) {
+  if (preparedFor(table)) return;
+  if (!table.multiProjection())
+    throw std::invalid_argument("psfs::EmptySpaceBound: needs a multi-projection table");
+  const VoxelGrid& g = table.grid();
+  nx_ = g.dims.x(), ny_ = g.dims.y(), nz_ = g.dims.z();
+  cx_ = (nx_ + kCell - 1) / kCell, cy_ = (ny_ + kCell - 1) / kCell, cz_ = (nz_ + kCell - 1) / kCell;
+  cameras_ = table.numCameras();
+  if (cameras_ > kMaxBoundCameras)
+    throw std::invalid_argument("psfs::EmptySpaceBound: more than 64 cameras");
+  const size_t n_cells = size_t(cx_) * cy_ * cz_;
+  const float inf = std::numeric_limits<float>::infinity();
+  // Per (cell, camera): the sample box in pixels and the observed voxels.
+  std::vector<float> box(n_cells * cameras_ * 4);
+  std::vector<int> observed(n_cells * cameras_, 0), voxels(n_cells, 0);
+  for (size_t i = 0; i < n_cells * cameras_; ++i) {
+    box[4 * i + 0] = inf, box[4 * i + 1] = -inf, box[4 * i + 2] = inf, box[4 * i + 3] = -inf;
+  }
+  const int nxp = table.paddedRowLength(), chunks = table.chunksPerRow();
+  std::vector<uint32_t> cs(table.centreScratchSize()), os(table.offsetScratchSize());
+  seen_.assign(size_t(nx_) * ny_ * nz_, 0);
+  auto grow = [&](size_t i, float u0, float u1, float v0, float v1) {
+    float* b = &box[4 * i];
+    b[0] = std::min(b[0], u0), b[1] = std::max(b[1], u1), b[2] = std::min(b[2], v0), b[3] = std::max(b[3], v1);
+  };
+  auto cellOf = [&](int x, int y, int z) {
+    return size_t(x / kCell) + size_t(cx_) * (size_t(y / kCell) + size_t(cy_) * (z / kCell));
+  };
+  for (int z = 0; z < nz_; ++z)
+    for (int y = 0; y < ny_; ++y) {
+      const size_t row = size_t(y) + size_t(ny_) * z;
+      const uint32_t* centres = table.rowCentres(row, cs.data());
+      const uint32_t* offsets = table.rowOffsets(row, os.data());
+      const size_t cell_row = size_t(cx_) * (size_t(y / kCell) + size_t(cy_) * (z / kCell));
+      for (int x = 0; x < nx_; ++x) ++voxels[cell_row + x / kCell];
+      for (int c = 0; c < cameras_; ++c) {
+        const uint32_t not_observed = PackedUV::notObserved(table.camera(c).height);
+        for (int x = 0; x < nx_; ++x) {
+          const uint32_t uv = centres[size_t(c) * nxp + x];
+          if (uv == not_observed) continue;
+          const size_t i = (cell_row + x / kCell) * cameras_ + c;
+          ++observed[i];
+          seen_[row * nx_ + x] |= uint64_t(1) << c;
+          const float u = float(PackedUV::u(uv)), v = float(PackedUV::v(uv));
+          const int next[3][3] = {{x + 1, y, z}, {x, y + 1, z}, {x, y, z + 1}};
+          for (int a = 0; a < 3; ++a) {
+            const uint32_t off = offsets[(size_t(c) * chunks + x / ProjectionTable::kChunk) * 3 + a];
+            const float du = float(int16_t(off & 0xFFFFu)) / PackedUV::kOne;
+            const float dv = float(int16_t(off >> 16)) / PackedUV::kOne;
+            grow(i, u - std::abs(du), u + std::abs(du), v - std::abs(dv), v + std::abs(dv));
+            // The face shared with the next voxel along this axis is sampled from this one (at
+            // its centre + its offset) while this one is observed, and that voxel's cell reads
+            // it too: with offsets clamped to kMaxSampleOffsetPx it is not that voxel's own
+            // centre - offset.
+            const int* q = next[a];
+            if (q[0] < nx_ && q[1] < ny_ && q[2] < nz_) {
+              const size_t j = cellOf(q[0], q[1], q[2]);
+              if (j != cell_row + x / kCell) grow(j * cameras_ + c, u + du, u + du, v + dv, v + dv);
+            }
+          }
+        }
+      }
+    }
+  cells_.assign(n_cells * cameras_, CellView{});
+  summaries_.assign(n_cells, CellSummary{});
+  for (size_t cell = 0; cell < n_cells; ++cell)
+    for (int c = 0; c < cameras_; ++c) {
+      const size_t i = cell * cameras_ + c;
+      CellView& cv = cells_[i];
+      if (observed[i] == 0) continue;  // kNone
+      cv.status = observed[i] < voxels[cell] ? kMixed : kAll;
+      ++(cv.status == kAll ? summaries_[cell].all : summaries_[cell].some);
+      const int w = table.camera(c).width, h = table.camera(c).height;
+      const float* b = &box[4 * i];
+      const int u0 = std::clamp(int(std::floor(b[0])) - kMarginPx, 0, w - 1);
+      const int u1 = std::clamp(int(std::floor(b[1])) + kMarginPx, 0, w - 1);
+      const int v0 = std::clamp(int(std::floor(b[2])) - kMarginPx, 0, h - 1);
+      const int v1 = std::clamp(int(std::floor(b[3])) + kMarginPx, 0, h - 1);
+      cv.tx0 = uint16_t(u0 / TileMaxImage::kTile), cv.tx1 = uint16_t(u1 / TileMaxImage::kTile);
+      cv.ty0 = uint16_t(v0 / TileMaxImage::kTile), cv.ty1 = uint16_t(v1 / TileMaxImage::kTile);
+    }
+  revision_ = table.revision();
+}
+
+bool EmptySpaceBound::cellBelow(int cell, const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p,
+                                int k, int32_t limit_per_view) const {
+  const CellSummary& summary = summaries_[size_t(cell)];
+  if (summary.all < p.min_views && summary.some == 0) return true;  // every voxel fuses to 0
+  // Without occlusion tolerance and with no camera observing only part of the cell, the sum of
+  // the bounds only falls as cameras are added: once below the limit it stays below.
+  const bool monotone = k == 0 && summary.some == 0;
+  const int64_t limit_sum = int64_t(summary.all) * limit_per_view;
+  // Bounds of the cameras that observe every voxel of the cell (all) and some of them (some).
+  int32_t all[kMaxBoundCameras], some[kMaxBoundCameras];
+  int n_all = 0, n_some = 0;
+  int64_t sum_all = 0;
+  bool all_read = true;  // every camera of the cell's summary gave a bound
+  for (int c = 0; c < cameras_; ++c) {
+    const CellView& cv = cells_[size_t(cell) * cameras_ + c];
+    if (cv.status == kNone) continue;
+    if (tiles[c].absent) {  // gives no voxel evidence: the general rule below counts the rest
+      all_read = false;
+      continue;
+    }
+    const int32_t b = tiles[c].rectMax(cv.tx0, cv.ty0, cv.tx1, cv.ty1);
+    if (b >= TileMaxImage::kInactive) return false;
+    if (cv.status == kAll) {
+      all[n_all++] = b;
+      sum_all += b;
+      // (an absent view only lowers the count, so the limit over the summary's count holds)
+      if (monotone && sum_all < limit_sum) return true;
+    } else {
+      some[n_some++] = b;
+    }
+  }
+  if (monotone && all_read) return false;
+  // A voxel's views are all of the first kind and some of the second; its mean is largest with
+  // the second kind's largest bounds, so j of those, for every j.
+  std::sort(some, some + n_some, std::greater<int32_t>());
+  int32_t views[kMaxBoundCameras];
+  for (int j = 0; j <= n_some; ++j) {
+    const int n = n_all + j;
+    if (n < p.min_views) continue;  // such voxels fuse to 0
+    std::copy(all, all + n_all, views);
+    std::copy(some, some + j, views + n_all);
+    const int kept = n - std::min(k, n - 1);
+    std::partial_sort(views, views + kept, views + n, std::greater<int32_t>());
+    int64_t sum = 0;
+    for (int i = 0; i < kept; ++i) sum += views[i];
+    if (sum >= int64_t(kept) * limit_per_view) return false;
+  }
+  return true;
+}
+
+void EmptySpaceBound::fillRow(size_t row, uint8_t fill, int min_views, uint64_t absent, uint8_t* out) const {
+  const uint64_t* seen = &seen_[row * size_t(nx_)];
+  for (int x = 0; x < nx_; ++x) out[x] = __builtin_popcountll(seen[x] & ~absent) >= min_views ? fill : uint8_t(0);
+}
+
+size_t EmptySpaceBound::skippableRows(const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p, int k,
+                                      double max_probability, std::vector<uint8_t>* rows) const {
+  if (int(tiles.size()) != cameras_)
+    throw std::invalid_argument("psfs::EmptySpaceBound: tile images for " + std::to_string(tiles.size()) +
+                                " cameras, table has " + std::to_string(cameras_));
+  if (!(max_probability > 0.0) || !(max_probability < 1.0))
+    throw std::invalid_argument("psfs::EmptySpaceBound: max_probability must be in (0, 1)");
+  rows->assign(size_t(ny_) * nz_, 0);
+  // mean + offset < ln(max_probability)  <=  sum < kept * floor(1024 (ln max - offset)).
+  const double limit = std::floor((std::log(max_probability) - double(p.offset)) * kVoxLogScale);
+  const int32_t limit_per_view = int32_t(std::max(limit, -1e9));
+  size_t skipped = 0;
+  for (int Z = 0; Z < cz_; ++Z)
+    for (int Y = 0; Y < cy_; ++Y) {
+      // The middle cells first: the person sits there, so a row that cannot be skipped is
+      // found out after a cell or two.
+      bool below = true;
+      for (int i = 0; i < cx_ && below; ++i) {
+        const int X = (cx_ / 2 + (i % 2 ? -(i + 1) / 2 : i / 2) + cx_) % cx_;
+        below = cellBelow(X + cx_ * (Y + cy_ * Z), tiles, p, k, limit_per_view);
+      }
+      if (!below) continue;
+      for (int z = Z * kCell; z < std::min(nz_, (Z + 1) * kCell); ++z)
+        for (int y = Y * kCell; y < std::min(ny_, (Y + 1) * kCell); ++y) {
+          (*rows)[size_t(y) + size_t(ny_) * z] = 1;
+          ++skipped;
+        }
+    }
+  return skipped;
+}
+
+}  // namespace detail
+}  // namespace psfs

@@ -1,0 +1,299 @@
+// Empty-space skipping in the multi-projection pSfS (PsfsOptions::skip_empty_below, issue 17):
+// every skipped voxel is one whose posterior without skipping lies below the level, every
+// other voxel is the same byte, on the simulated rig's frames (synthetic classifier-like
+// likelihoods and the real pipeline), with occlusion tolerance, masked views, on-the-fly tables
+// and any thread count. The figures printed are the skipped share of the grid's rows.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+
+#include "../src/empty_space_bound.h"
+#include "../src/psfs_kernels.h"
+#include "expect_throw.h"
+#include "fusion_test_utils.h"
+#include "psfs_reconstruction/psfs_fusion.h"
+#include "psfs_reconstruction/reconstructor.h"
+#include "tabletop_sim/simulated_rig.h"
+#include "test_data_path.h"
+
+namespace psfs {
+namespace {
+
+namespace sim = tabletop_sim;
+
+// The rule, exactly: the rows the bound skips hold its fill (0 where a voxel has fewer than
+// min_views cameras), and each of their voxels was at most the level's byte without skipping
+// (the bound's soundness); every other row is the full fusion's bytes. Returns the voxels that
+// differ from the full fusion.
+size_t expectSkippingRule(const ProjectionTable& table, const ViewEvidence& ev, const PsfsOptions& skipping,
+                          const ProbabilityVolume& full, const ProbabilityVolume& skipped, const std::string& what) {
+  EXPECT_EQ(full.data.size(), skipped.data.size()) << what;
+  if (full.data.size() != skipped.data.size()) return 0;
+  detail::EmptySkipCache cache;
+  detail::tileMaxImages(ev, 1, &cache.tiles);
+  std::vector<uint8_t> rows;
+  detail::skippedRows(skipping, table, &cache, &rows);
+  const size_t nx = size_t(table.grid().dims.x());
+  // A posterior below the level rounds to at most this byte (the exp table rounds to nearest).
+  const int level_byte = int(skipping.skip_empty_below * 255.0 + 0.5);
+  std::vector<uint8_t> fill_row(nx);
+  size_t changed = 0, bad_rows = 0, unsound = 0;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const uint8_t* a = full.data.data() + r * nx;
+    const uint8_t* b = skipped.data.data() + r * nx;
+    for (size_t x = 0; x < nx; ++x) changed += a[x] != b[x];
+    if (!rows[r]) {
+      if (!std::equal(a, a + nx, b) && ++bad_rows <= 3) ADD_FAILURE() << what << ": computed row " << r << " differs";
+      continue;
+    }
+    cache.bound.fillRow(r, cache.fill, skipping.min_views, cache.absent, fill_row.data());
+    if (!std::equal(fill_row.begin(), fill_row.end(), b) && ++bad_rows <= 3)
+      ADD_FAILURE() << what << ": skipped row " << r << " is not the fill " << int(cache.fill);
+    for (size_t x = 0; x < nx; ++x)
+      if (a[x] > level_byte && ++unsound <= 3)
+        ADD_FAILURE() << what << ": skipped voxel " << r * nx + x << " was " << int(a[x]) << " (level byte "
+                      << level_byte << ")";
+  }
+  EXPECT_EQ(bad_rows, 0u) << what;
+  EXPECT_EQ(unsound, 0u) << what;
+  return changed;
+}
+
+struct SimViews {
+  std::vector<std::vector<ViewImage>> frames[2];  // [class][frame]
+  std::vector<tabletop_capture::CameraModel> cameras;
+};
+
+// Three frames of 'wave' with short sleeves: the person and skin masks as classifier-like
+// likelihoods (noise and outliers), as test_fusion_sim has them.
+const SimViews& simViews() {
+  static const SimViews v = [] {
+    SimViews s;
+    sim::SimOptions so;
+    so.script = "wave";
+    so.empty_frames = 0;
+    so.render_masks = true;
+    so.short_sleeves = true;
+    sim::SimulatedRig rig(so);
+    s.cameras = rig.rig().cameras;
+    const int n = rig.scriptFrames();
+    for (int f : {n / 5, n / 2, 4 * n / 5}) {
+      const sim::SimFrame fr = rig.render(f);
+      for (int cls = 0; cls < 2; ++cls) {
+        std::vector<ViewImage> views;
+        for (size_t c = 0; c < fr.person_masks.size(); ++c)
+          views.push_back(ViewImage{test::classifierLikelihood(cls ? fr.skin_masks[c] : fr.person_masks[c], true,
+                                                               1000 * f + c + (cls ? 7919 : 0)),
+                                    0, cv::Mat()});
+        s.frames[cls].push_back(views);
+      }
+    }
+    return s;
+  }();
+  return v;
+}
+
+TEST(EmptySpaceSkipping, SkipsOnlyRowsBelowTheLevelAndLeavesTheRestByteForByte) {
+  const SimViews& s = simViews();
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(referenceGrid(Resolution::k16mm), s.cameras, to);
+  ProjectionTableOptions fly = to;
+  fly.storage = TableStorage::kOnTheFly;
+  const ProjectionTable fly_table(referenceGrid(Resolution::k16mm), s.cameras, fly);
+  for (int cls = 0; cls < 2; ++cls)
+    for (double level : {0.1, 0.3, 0.5})
+      for (int threads : {1, 2, 3}) {
+        PsfsOptions o;
+        o.multi_projection = true;
+        o.occluded_views = cls;  // skin tolerates a view, as the pipeline's
+        o.threads = threads;
+        PsfsOptions os = o;
+        os.skip_empty_below = level;
+        const PsfsFusion full(o), skipping(os);
+        double skipped_rows = 0;
+        for (size_t f = 0; f < s.frames[cls].size(); ++f) {
+          ViewEvidence ev;
+          ev.set(s.frames[cls][f], true);
+          ProbabilityVolume a, b, c;
+          full.fuse(table, ev, &a);
+          skipping.fuse(table, ev, &b);
+          skipped_rows += skipping.lastSkippedFraction() / s.frames[cls].size();
+          const std::string what = std::string(cls ? "skin" : "body") + " level " + std::to_string(level) +
+                                   " threads " + std::to_string(threads) + " frame " + std::to_string(f);
+          expectSkippingRule(table, ev, os, a, b, what);
+          skipping.fuse(fly_table, ev, &c);  // the on-the-fly table: the same bytes
+          EXPECT_EQ(b.data, c.data) << what << " (on-the-fly table)";
+        }
+        if (threads == 1)
+          std::printf("[ figures  ] %s, level %.1f: %.0f %% of the rows skipped\n", cls ? "skin" : "body", level,
+                      100.0 * skipped_rows);
+        // The bound is not vacuous: most of the workspace is empty in the default rig's views
+        // (these likelihoods' background is 0.1-0.2, above the lower levels).
+        if (level == 0.5) {
+          EXPECT_GT(skipped_rows, 0.3) << (cls ? "skin" : "body");
+        }
+      }
+}
+
+// Every face kernel (the reference, Highway's, the hand-written ones) re-samples the carried
+// faces the same way after a skipped row; a grid whose sides are not multiples of the cell or
+// the kernels' vectors; the layers under a floor (0 whatever is skipped).
+TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
+  const SimViews& s = simViews();
+  VoxelGrid odd = referenceGrid(Resolution::k16mm);
+  odd.dims = Eigen::Vector3i(61, 59, 45);
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  for (const VoxelGrid& g : {referenceGrid(Resolution::k16mm), odd}) {
+    const ProjectionTable table(g, s.cameras, to);
+    ViewEvidence ev;
+    ev.set(s.frames[0][1], true);
+    // -1: the reference, -2: the hand-written x86 kernels, then Highway's best non-AVX-512 target.
+    for (int64_t kernel : {int64_t(-1), int64_t(-2), detail::hwyRowTarget(true, false)})
+      for (double floor_z : {-std::numeric_limits<double>::infinity(), 0.1}) {
+        detail::forceFaceRowKernelForTest(kernel);
+        PsfsOptions o;
+        o.multi_projection = true;
+        o.floor_z = floor_z;
+        o.threads = 2;
+        PsfsOptions os = o;
+        os.skip_empty_below = 0.5;
+        ProbabilityVolume a, b;
+        PsfsFusion(o).fuse(table, ev, &a);
+        PsfsFusion(os).fuse(table, ev, &b);
+        expectSkippingRule(table, ev, os, a, b,
+                           g.describe() + " kernel " + std::to_string(kernel) + " floor " + std::to_string(floor_z));
+      }
+    detail::forceFaceRowKernelForTest(0);
+  }
+}
+
+// A camera switched off as a whole (dark, missing) observes nothing: it neither blocks the
+// skipping nor counts as a view.
+TEST(EmptySpaceSkipping, AViewSwitchedOffAsAWholeIsLeftOut) {
+  const SimViews& s = simViews();
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(referenceGrid(Resolution::k16mm), s.cameras, to);
+  std::vector<ViewImage> views = s.frames[0][1];
+  views[2].active = cv::Mat::zeros(views[2].likelihood.size(), CV_8UC1);
+  ViewEvidence ev;
+  ev.set(views, true);
+  PsfsOptions o;
+  o.multi_projection = true;
+  PsfsOptions os = o;
+  os.skip_empty_below = 0.5;
+  const PsfsFusion skipping(os);
+  ProbabilityVolume a, b;
+  PsfsFusion(o).fuse(table, ev, &a);
+  skipping.fuse(table, ev, &b);
+  expectSkippingRule(table, ev, os, a, b, "camera 2 off");
+  EXPECT_GT(skipping.lastSkippedFraction(), 0.3);
+}
+
+// The GPU paths fuse every row and then fill the ones PsfsFusion skips, with the bounds taken
+// from the host's views (likelihood channel and masks) instead of the evidence: the same bytes.
+TEST(EmptySpaceSkipping, FillingAFullFusionGivesTheSkippingFusionsBytes) {
+  const SimViews& s = simViews();
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(referenceGrid(Resolution::k16mm), s.cameras, to);
+  for (int cls = 0; cls < 2; ++cls) {
+    std::vector<ViewImage> views = s.frames[cls][2];
+    views[1].active = cv::Mat(views[1].likelihood.size(), CV_8UC1, cv::Scalar(1));
+    views[1].active(cv::Rect(10, 20, 60, 50)).setTo(0);  // part of a view masked
+    views[4].active = cv::Mat::zeros(views[4].likelihood.size(), CV_8UC1);  // a view off
+    // The host keeps the classifier's two-channel image: the class is a channel of it.
+    std::vector<ViewImage> host = views;
+    for (ViewImage& v : host) {
+      cv::Mat two;
+      cv::merge(std::vector<cv::Mat>{cls ? cv::Mat::zeros(v.likelihood.size(), CV_8UC1) : v.likelihood,
+                                     cls ? v.likelihood : cv::Mat::zeros(v.likelihood.size(), CV_8UC1)},
+                two);
+      v.likelihood = two;
+      v.channel = cls;
+    }
+    ViewEvidence ev;
+    ev.set(views, true);
+    PsfsOptions o;
+    o.multi_projection = true;
+    o.occluded_views = cls;
+    PsfsOptions os = o;
+    os.skip_empty_below = 0.5;
+    ProbabilityVolume full, skipped;
+    PsfsFusion(o).fuse(table, ev, &full);
+    PsfsFusion(os).fuse(table, ev, &skipped);
+    detail::EmptySkipCache cache;
+    detail::tileMaxImages(host, 1, &cache.tiles);
+    detail::fillSkippedRows(os, table, &cache, &full);
+    EXPECT_EQ(full.data, skipped.data) << (cls ? "skin" : "body");
+    EXPECT_GT(cache.last_fraction, 0.2) << (cls ? "skin" : "body");
+  }
+}
+
+TEST(EmptySpaceSkipping, RejectsLevelsThatCouldTouchTheHull) {
+  PsfsOptions o;
+  o.multi_projection = true;
+  for (double bad : {-0.1, 0.75, 0.9, std::nan("")}) {
+    o.skip_empty_below = bad;
+    psfs_test::expectThrowContaining<std::invalid_argument>([&] { PsfsFusion f(o); }, "skip_empty_below");
+  }
+  // The single-projection path ignores it (it has no face samples to spare).
+  o.multi_projection = false;
+  o.skip_empty_below = 0.3;
+  EXPECT_NO_THROW(PsfsFusion f(o));
+  // The hand sub-volumes refuse it (their cube is projected anew every frame).
+  ReconstructorParams p;
+  p.hand.skip_empty_below = 0.3;
+  psfs_test::expectThrowContaining<std::invalid_argument>([&] { p.validate(); }, "hand.skip_empty_below");
+}
+
+// The real pipeline (classifier, background learned from 25 sets), 4 frames of 'wave': body
+// and skin with the skipping of `level` against none.
+TEST(EmptySpaceSkipping, PipelineVolumesKeepEveryVoxelAboveTheLevel) {
+  const double level = 0.5;
+  std::vector<FrameResult> results[2];
+  for (int skip : {0, 1}) {
+    sim::SimOptions so;
+    so.script = "wave";
+    so.empty_frames = 25;
+    sim::SimulatedRig rig(so);
+    ReconstructorParams params;
+    params.threads = 2;
+    params.body.skip_empty_below = params.skin.skip_empty_below = skip ? level : 0.0;  // the default skips
+    Reconstructor r(GaussianMixture2D::load(psfs_test::configDir() + "/skin_gmm.yaml"), params);
+    for (int f = 0; f < 25; ++f) r.process(rig.render(f).images, rig.rig().cameras);
+    ASSERT_TRUE(r.backgroundReady());
+    const int n = rig.scriptFrames();
+    for (int f : {25 + 5, 25 + (n - 25) / 3, 25 + 2 * (n - 25) / 3, n - 3}) {
+      results[skip].push_back(r.process(rig.render(f).images, rig.rig().cameras));
+      ASSERT_EQ(results[skip].back().status, FrameResult::Status::kReconstructed);
+    }
+  }
+  // The Reconstructor's evidence is its own: here the rule's weaker half, voxel by voxel.
+  const int level_byte = int(level * 255.0 + 0.5);
+  size_t changed = 0, voxels = 0, bad = 0;
+  for (size_t i = 0; i < results[0].size(); ++i)
+    for (int kind = 0; kind < 2; ++kind) {
+      const ProbabilityVolume& a = kind ? results[0][i].skin : results[0][i].body;
+      const ProbabilityVolume& b = kind ? results[1][i].skin : results[1][i].body;
+      ASSERT_EQ(a.data.size(), b.data.size());
+      for (size_t v = 0; v < a.data.size(); ++v) {
+        if (a.data[v] == b.data[v]) continue;
+        ++changed;
+        if ((a.data[v] > level_byte || b.data[v] > level_byte) && ++bad <= 5)
+          ADD_FAILURE() << (kind ? "skin" : "body") << " frame " << i << " voxel " << v << ": " << int(a.data[v])
+                        << " -> " << int(b.data[v]);
+      }
+      voxels += a.data.size();
+    }
+  EXPECT_EQ(bad, 0u);
+  std::printf("[ figures  ] pipeline, 4 frames, level %.2f: %.1f %% of the voxels changed (to the fill)\n", level,
+              100.0 * double(changed) / double(voxels));
+}
+
+}  // namespace
+}  // namespace psfs
