@@ -216,14 +216,13 @@ void EmptySpaceBound::prepare(const ProjectionTable& table) {
       const size_t row = size_t(y) + size_t(ny_) * z;
       const uint32_t* centres = table.rowCentres(row, cs.data());
       const uint32_t* offsets = table.rowOffsets(row, os.data());
-      const size_t cell_row = size_t(cx_) * (size_t(y / kCell) + size_t(cy_) * (z / kCell));
-      for (int x = 0; x < nx_; ++x) ++voxels[cell_row + x / kCell];
+      for (int x = 0; x < nx_; ++x) ++voxels[cellOf(x, y, z)];
       for (int c = 0; c < cameras_; ++c) {
         const uint32_t not_observed = PackedUV::notObserved(table.camera(c).height);
         for (int x = 0; x < nx_; ++x) {
           const uint32_t uv = centres[size_t(c) * nxp + x];
           if (uv == not_observed) continue;
-          const size_t i = (cell_row + x / kCell) * cameras_ + c;
+          const size_t cell = cellOf(x, y, z), i = cell * cameras_ + c;
           ++observed[i];
           seen_[row * nx_ + x] |= uint64_t(1) << c;
           const float u = float(PackedUV::u(uv)), v = float(PackedUV::v(uv));
@@ -240,7 +239,7 @@ void EmptySpaceBound::prepare(const ProjectionTable& table) {
             const int* q = next[a];
             if (q[0] < nx_ && q[1] < ny_ && q[2] < nz_) {
               const size_t j = cellOf(q[0], q[1], q[2]);
-              if (j != cell_row + x / kCell) grow(j * cameras_ + c, u + du, u + du, v + dv, v + dv);
+              if (j != cell) grow(j * cameras_ + c, u + du, u + du, v + dv, v + dv);
             }
           }
         }

@@ -109,6 +109,10 @@ class EmptySpaceBound {
   std::vector<uint64_t> seen_;           // per voxel (grid order): a bit per observing camera
 };
 
+// Whether a fusion with these options skips empty space (PsfsOptions::skip_empty_below: the
+// multi-projection test's only).
+inline bool skipsEmptySpace(const PsfsOptions& o) { return o.multi_projection && o.skip_empty_below > 0.0; }
+
 // The tiles of every view of a frame's evidence (inactive where its terms say "no evidence").
 void tileMaxImages(const ViewEvidence& evidence, int threads, std::vector<TileMaxImage>* out);
 // The same from the views ViewEvidence::set would take (the GPU paths keep these on the host).

@@ -65,7 +65,7 @@ void GpuFramePath::buildEvidence(const std::vector<bool>& camera_active,
   // The bounds of the CPU path's skipping, from the same likelihoods and masks.
   for (int kind = 0; kind < (with_skin ? 2 : 1); ++kind) {
     const PsfsOptions& o = (kind ? skin_ : body_).options();
-    if (!o.multi_projection || o.skip_empty_below <= 0.0) continue;
+    if (!detail::skipsEmptySpace(o)) continue;
     std::vector<ViewImage> views(likelihoods.size());
     for (size_t i = 0; i < views.size(); ++i) views[i] = ViewImage{likelihoods[i], kind, active[i]};
     detail::tileMaxImages(views, o.threads, &(kind ? skin_skip_ : body_skip_).tiles);
@@ -74,12 +74,12 @@ void GpuFramePath::buildEvidence(const std::vector<bool>& camera_active,
 
 void GpuFramePath::fuseBody(const ProjectionTable& table, ProbabilityVolume* out) {
   body_.fuse(table, pixels_.bodyEvidence(), out);
-  if (body_.options().multi_projection && body_.options().skip_empty_below > 0.0)
+  if (detail::skipsEmptySpace(body_.options()))
     detail::fillSkippedRows(body_.options(), table, &body_skip_, out);
 }
 void GpuFramePath::fuseSkin(const ProjectionTable& table, ProbabilityVolume* out) {
   skin_.fuse(table, pixels_.skinEvidence(), out);
-  if (skin_.options().multi_projection && skin_.options().skip_empty_below > 0.0)
+  if (detail::skipsEmptySpace(skin_.options()))
     detail::fillSkippedRows(skin_.options(), table, &skin_skip_, out);
 }
 void GpuFramePath::fuseHand(const ProjectionTable& table, ProbabilityVolume* out) {

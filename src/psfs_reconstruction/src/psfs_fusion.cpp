@@ -126,7 +126,7 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
     const detail::PsfsFaceRowFn face_fn = detail::selectPsfsFaceRow(options_.occluded_views, vector);
     std::vector<uint8_t> skip;
     std::unique_lock<std::mutex> lock;  // held through the fusion: skipped rows read the bound
-    if (options_.skip_empty_below > 0.0) {  // (this branch is the multi-projection's)
+    if (detail::skipsEmptySpace(options_)) {
       lock = std::unique_lock<std::mutex>(skip_->mutex);
       detail::tileMaxImages(evidence, options_.threads, &skip_->tiles);
       detail::skippedRows(options_, table, skip_.get(), &skip);

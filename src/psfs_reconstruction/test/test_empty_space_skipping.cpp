@@ -12,6 +12,7 @@
 #include "../src/empty_space_bound.h"
 #include "../src/psfs_kernels.h"
 #include "expect_throw.h"
+#include "gpu_fusion_cases.h"
 #include "fusion_test_utils.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/reconstructor.h"
@@ -66,29 +67,17 @@ struct SimViews {
   std::vector<tabletop_capture::CameraModel> cameras;
 };
 
-// Three frames of 'wave' with short sleeves: the person and skin masks as classifier-like
-// likelihoods (noise and outliers), as test_fusion_sim has them.
+// Three frames of 'wave' with short sleeves as the GPU fusion tests have them (gpu_fusion_cases.h:
+// the renderer's masks as classifier-like likelihoods with noise and outliers, CV_8UC2 with
+// channel 0 body and 1 skin).
 const SimViews& simViews() {
   static const SimViews v = [] {
     SimViews s;
-    sim::SimOptions so;
-    so.script = "wave";
-    so.empty_frames = 0;
-    so.render_masks = true;
-    so.short_sleeves = true;
-    sim::SimulatedRig rig(so);
-    s.cameras = rig.rig().cameras;
-    const int n = rig.scriptFrames();
+    const int n = gpu_test::simRig().scriptFrames();
     for (int f : {n / 5, n / 2, 4 * n / 5}) {
-      const sim::SimFrame fr = rig.render(f);
-      for (int cls = 0; cls < 2; ++cls) {
-        std::vector<ViewImage> views;
-        for (size_t c = 0; c < fr.person_masks.size(); ++c)
-          views.push_back(ViewImage{test::classifierLikelihood(cls ? fr.skin_masks[c] : fr.person_masks[c], true,
-                                                               1000 * f + c + (cls ? 7919 : 0)),
-                                    0, cv::Mat()});
-        s.frames[cls].push_back(views);
-      }
+      const gpu_test::SimScene scene = gpu_test::simScene(f, /*inactive=*/false);
+      s.cameras = scene.cameras;
+      for (int cls = 0; cls < 2; ++cls) s.frames[cls].push_back(scene.views(cls));
     }
     return s;
   }();
@@ -206,16 +195,6 @@ TEST(EmptySpaceSkipping, FillingAFullFusionGivesTheSkippingFusionsBytes) {
     views[1].active = cv::Mat(views[1].likelihood.size(), CV_8UC1, cv::Scalar(1));
     views[1].active(cv::Rect(10, 20, 60, 50)).setTo(0);  // part of a view masked
     views[4].active = cv::Mat::zeros(views[4].likelihood.size(), CV_8UC1);  // a view off
-    // The host keeps the classifier's two-channel image: the class is a channel of it.
-    std::vector<ViewImage> host = views;
-    for (ViewImage& v : host) {
-      cv::Mat two;
-      cv::merge(std::vector<cv::Mat>{cls ? cv::Mat::zeros(v.likelihood.size(), CV_8UC1) : v.likelihood,
-                                     cls ? v.likelihood : cv::Mat::zeros(v.likelihood.size(), CV_8UC1)},
-                two);
-      v.likelihood = two;
-      v.channel = cls;
-    }
     ViewEvidence ev;
     ev.set(views, true);
     PsfsOptions o;
@@ -227,7 +206,7 @@ TEST(EmptySpaceSkipping, FillingAFullFusionGivesTheSkippingFusionsBytes) {
     PsfsFusion(o).fuse(table, ev, &full);
     PsfsFusion(os).fuse(table, ev, &skipped);
     detail::EmptySkipCache cache;
-    detail::tileMaxImages(host, 1, &cache.tiles);
+    detail::tileMaxImages(views, 1, &cache.tiles);  // the classifier's two-channel images
     detail::fillSkippedRows(os, table, &cache, &full);
     EXPECT_EQ(full.data, skipped.data) << (cls ? "skin" : "body");
     EXPECT_GT(cache.last_fraction, 0.2) << (cls ? "skin" : "body");
