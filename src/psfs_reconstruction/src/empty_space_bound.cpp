@@ -1,6 +1,7 @@
 #include "empty_space_bound.h"
 
 #include <algorithm>
+#include <bitset>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -44,11 +45,19 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
   row_min_.resize(size_t(width));
   col_max_.resize(size_t(width));
   size_t off_tiles = 0;
-  int histogram[256] = {0};
-  for (int v = 0; v < height; v += 2) {  // every 2nd row is plenty for the commonest byte
+  // Every 4th row is plenty for the commonest byte (the background covers most of a view).
+  // Four histograms, a pixel's by u % 4: most pixels hold the same byte, and one counter would
+  // make each increment wait for the last.
+  int histograms[4][256] = {{0}};
+  for (int v = 0; v < height; v += 4) {
     const uint8_t* r = likelihood + size_t(v) * stride;
-    for (int u = 0; u < width; ++u) ++histogram[r[u]];
+    int u = 0;
+    for (; u + 4 <= width; u += 4)
+      ++histograms[0][r[u]], ++histograms[1][r[u + 1]], ++histograms[2][r[u + 2]], ++histograms[3][r[u + 3]];
+    for (; u < width; ++u) ++histograms[0][r[u]];
   }
+  int histogram[256];
+  for (int i = 0; i < 256; ++i) histogram[i] = histograms[0][i] + histograms[1][i] + histograms[2][i] + histograms[3][i];
   mode = uint8_t(std::max_element(histogram, histogram + 256) - histogram);
   const std::vector<int32_t>& term = byteBounds();
   std::vector<uint8_t> off(static_cast<size_t>(tiles_x));
@@ -151,14 +160,20 @@ void tileMaxImages(const std::vector<ViewImage>& views, int threads, std::vector
   }
 }
 
-double skippedRows(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
-                   std::vector<uint8_t>* rows) {
+double skippedChunks(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
+                     std::vector<uint8_t>* flags) {
   cache->bound.prepare(table);
   const PsfsRowParams p = psfsRowParams(o, table);
-  size_t n = cache->bound.skippableRows(cache->tiles, p, o.occluded_views, o.skip_empty_below, rows);
-  const size_t floor_rows = std::min(rows->size(), size_t(p.first_layer) * size_t(table.grid().dims.y()));
-  for (size_t r = 0; r < floor_rows; ++r) n -= (*rows)[r], (*rows)[r] = 0;
-  cache->last_fraction = rows->empty() ? 0.0 : double(n) / double(rows->size());
+  cache->bound.skippableChunks(cache->tiles, p, o.occluded_views, o.skip_empty_below, flags);
+  const size_t chunks = size_t(p.chunks), rows = size_t(table.grid().numRows());
+  const size_t floor_rows = std::min(rows, size_t(p.first_layer) * size_t(table.grid().dims.y()));
+  std::fill(flags->begin(), flags->begin() + floor_rows * chunks, uint8_t(0));
+  size_t n = 0;  // skipped voxels
+  for (size_t r = floor_rows; r < rows; ++r)
+    for (size_t a = 0; a < chunks; ++a)
+      if ((*flags)[r * chunks + a])
+        n += std::min<size_t>(size_t(p.nx), (a + 1) * ProjectionTable::kChunk) - a * ProjectionTable::kChunk;
+  cache->last_fraction = rows == 0 ? 0.0 : double(n) / double(rows * size_t(p.nx));
   cache->absent = 0;
   for (size_t c = 0; c < cache->tiles.size(); ++c)
     if (cache->tiles[c].absent) cache->absent |= uint64_t(1) << c;
@@ -174,13 +189,14 @@ double skippedRows(const PsfsOptions& o, const ProjectionTable& table, EmptySkip
   return cache->last_fraction;
 }
 
-void fillSkippedRows(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
-                     ProbabilityVolume* out) {
-  std::vector<uint8_t> rows;
-  skippedRows(o, table, cache, &rows);
-  const size_t nx = size_t(table.grid().dims.x());
-  for (size_t r = 0; r < rows.size(); ++r)
-    if (rows[r]) cache->bound.fillRow(r, cache->fill, o.min_views, cache->absent, out->data.data() + r * nx);
+void fillSkipped(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
+                 ProbabilityVolume* out) {
+  std::vector<uint8_t> flags;
+  skippedChunks(o, table, cache, &flags);
+  const size_t nx = size_t(table.grid().dims.x()), chunks = size_t(table.chunksPerRow());
+  for (size_t r = 0; r < table.grid().numRows(); ++r)
+    cache->bound.fillChunks(r, &flags[r * chunks], cache->fill, o.min_views, cache->absent,
+                            out->data.data() + r * nx);
 }
 
 void EmptySpaceBound::prepare(const ProjectionTable& table) {
@@ -190,6 +206,7 @@ void EmptySpaceBound::prepare(const ProjectionTable& table) {
   const VoxelGrid& g = table.grid();
   nx_ = g.dims.x(), ny_ = g.dims.y(), nz_ = g.dims.z();
   cx_ = (nx_ + kCell - 1) / kCell, cy_ = (ny_ + kCell - 1) / kCell, cz_ = (nz_ + kCell - 1) / kCell;
+  chunks_ = table.chunksPerRow();
   cameras_ = table.numCameras();
   if (cameras_ > kMaxBoundCameras)
     throw std::invalid_argument("psfs::EmptySpaceBound: more than 64 cameras");
@@ -244,6 +261,14 @@ void EmptySpaceBound::prepare(const ProjectionTable& table) {
           }
         }
       }
+    }
+  views_seen_.resize(seen_.size());
+  for (size_t i = 0; i < seen_.size(); ++i) views_seen_[i] = uint8_t(std::bitset<64>(seen_[i]).count());
+  chunk_views_.assign(size_t(ny_) * nz_ * chunks_, uint8_t(255));
+  for (size_t row = 0; row < size_t(ny_) * nz_; ++row)
+    for (int x = 0; x < nx_; ++x) {
+      uint8_t& m = chunk_views_[row * chunks_ + size_t(x / kChunk)];
+      m = std::min(m, views_seen_[row * nx_ + size_t(x)]);
     }
   cells_.assign(n_cells * cameras_, CellView{});
   summaries_.assign(n_cells, CellSummary{});
@@ -316,37 +341,52 @@ bool EmptySpaceBound::cellBelow(int cell, const std::vector<TileMaxImage>& tiles
   return true;
 }
 
-void EmptySpaceBound::fillRow(size_t row, uint8_t fill, int min_views, uint64_t absent, uint8_t* out) const {
-  const uint64_t* seen = &seen_[row * size_t(nx_)];
-  for (int x = 0; x < nx_; ++x) out[x] = __builtin_popcountll(seen[x] & ~absent) >= min_views ? fill : uint8_t(0);
+void EmptySpaceBound::fillChunks(size_t row, const uint8_t* flags, uint8_t fill, int min_views, uint64_t absent,
+                                 uint8_t* out) const {
+  const size_t first = row * size_t(nx_);
+  for (int a = 0; a < chunks_; ++a) {
+    if (!flags[a]) continue;
+    const int x1 = std::min(nx_, (a + 1) * kChunk);
+    if (absent == 0 && chunk_views_[row * chunks_ + size_t(a)] >= min_views) {
+      std::fill(out + a * kChunk, out + x1, fill);
+    } else if (absent == 0) {
+      for (int x = a * kChunk; x < x1; ++x) out[x] = views_seen_[first + size_t(x)] >= min_views ? fill : uint8_t(0);
+    } else {
+      for (int x = a * kChunk; x < x1; ++x)
+        out[x] = __builtin_popcountll(seen_[first + size_t(x)] & ~absent) >= min_views ? fill : uint8_t(0);
+    }
+  }
 }
 
-size_t EmptySpaceBound::skippableRows(const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p, int k,
-                                      double max_probability, std::vector<uint8_t>* rows) const {
+size_t EmptySpaceBound::skippableChunks(const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p, int k,
+                                        double max_probability, std::vector<uint8_t>* flags) const {
   if (int(tiles.size()) != cameras_)
     throw std::invalid_argument("psfs::EmptySpaceBound: tile images for " + std::to_string(tiles.size()) +
                                 " cameras, table has " + std::to_string(cameras_));
   if (!(max_probability > 0.0) || !(max_probability < 1.0))
     throw std::invalid_argument("psfs::EmptySpaceBound: max_probability must be in (0, 1)");
-  rows->assign(size_t(ny_) * nz_, 0);
+  flags->assign(size_t(ny_) * nz_ * chunks_, 0);
   // mean + offset < ln(max_probability)  <=  sum < kept * floor(1024 (ln max - offset)).
   const double limit = std::floor((std::log(max_probability) - double(p.offset)) * kVoxLogScale);
   const int32_t limit_per_view = int32_t(std::max(limit, -1e9));
+  constexpr int kCellsPerChunk = kChunk / kCell;
+  std::vector<uint8_t> chunk_below(static_cast<size_t>(chunks_), 0);
   size_t skipped = 0;
   for (int Z = 0; Z < cz_; ++Z)
     for (int Y = 0; Y < cy_; ++Y) {
-      // The middle cells first: the person sits there, so a row that cannot be skipped is
-      // found out after a cell or two.
-      bool below = true;
-      for (int i = 0; i < cx_ && below; ++i) {
-        const int X = (cx_ / 2 + (i % 2 ? -(i + 1) / 2 : i / 2) + cx_) % cx_;
-        below = cellBelow(X + cx_ * (Y + cy_ * Z), tiles, p, k, limit_per_view);
+      int n = 0;  // voxels of a row in skipped chunks
+      for (int a = 0; a < chunks_; ++a) {
+        bool all = true;  // a chunk's cells until one is not below
+        for (int X = a * kCellsPerChunk; X < std::min(cx_, (a + 1) * kCellsPerChunk) && all; ++X)
+          all = cellBelow(X + cx_ * (Y + cy_ * Z), tiles, p, k, limit_per_view);
+        chunk_below[size_t(a)] = uint8_t(all);
+        if (all) n += std::min(nx_, (a + 1) * kChunk) - a * kChunk;
       }
-      if (!below) continue;
+      if (n == 0) continue;
       for (int z = Z * kCell; z < std::min(nz_, (Z + 1) * kCell); ++z)
         for (int y = Y * kCell; y < std::min(ny_, (Y + 1) * kCell); ++y) {
-          (*rows)[size_t(y) + size_t(ny_) * z] = 1;
-          ++skipped;
+          std::copy(chunk_below.begin(), chunk_below.end(), flags->begin() + (size_t(y) + size_t(ny_) * z) * chunks_);
+          skipped += size_t(n);
         }
     }
   return skipped;

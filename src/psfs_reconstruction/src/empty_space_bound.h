@@ -14,18 +14,19 @@
 //    at most the mean of these bounds (with occlusion tolerance k: of the n - k largest, as
 //    dropping low views only raises the mean; with cameras that observe some of the voxels:
 //    the largest over how many of them a voxel has), and the posterior at most exp(mean + offset).
-// A grid row (y, z) whose cells along x are all below the level is not fused but set to the
-// background's posterior (skippedRows: every camera's commonest byte, fused);
-// the kernels' carried faces are re-sampled where a computed row follows a skipped one
-// (forEachFaceRow), so every computed row is the same bytes as without skipping.
+// A chunk of a grid row (8 voxels along x: the kernels' unit, two cells) whose cells are both
+// below the level is not fused but set to the background's posterior (skippedChunks: every
+// camera's commonest byte, fused); the rest of the row is fused in spans, the kernels' carried
+// faces re-sampled where a span's neighbour was not computed (forEachFaceRow), so every computed
+// voxel is the same bytes as without skipping.
 //
 // What the 2x2 minimum gives up: the plain maximum would make the bound strict, but one noisy
 // pixel in a tile then holds it up (on the pipeline's frames it skipped 6 % of the voxels; the
 // 2x2 minimum 67 %). A bright structure under 2 px wide in one view (under ~7 mm at 1 m on the
 // default rig, half a 16 mm voxel) drops that view's bound to its background, so a voxel it
-// would have lifted above the level can be lost in a skipped row. test_empty_space_skipping checks on the simulated rig's
-// frames (synthetic likelihoods and the real classifier) that no voxel at or above the level
-// changes. Cells with an inactive pixel in their tiles are never skipped; a view switched off
+// would have lifted above the level can be lost in a skipped chunk. test_empty_space_skipping
+// checks on the simulated rig's frames (synthetic likelihoods and the real classifier) that no
+// voxel at or above the level changes. Cells with an inactive pixel in their tiles are never skipped; a view switched off
 // as a whole counts as not observing.
 #pragma once
 
@@ -71,21 +72,29 @@ struct TileMaxImage {
 
 class EmptySpaceBound {
  public:
-  static constexpr int kCell = 4;  // voxels per cell side
+  // Voxels per cell side. Cells of 2 along y and z, or tiles of 4 px, skip 3 % more of the
+  // voxels on the pipeline's frame but cost as much more in the bound (docs/benchmarks.md).
+  static constexpr int kCell = 4;
+  static constexpr int kChunk = ProjectionTable::kChunk;
+  static_assert(kChunk % kCell == 0, "a chunk holds whole cells");
 
   // Derives the cells' tiles from a multi-projection table; nothing to do when the table's
   // revision is the one prepared. Throws std::invalid_argument for a table without offsets.
   void prepare(const ProjectionTable& table);
   bool preparedFor(const ProjectionTable& table) const { return revision_ == table.revision(); }
 
-  // rows[y + ny z] = 1 where every voxel of the grid row provably fuses below `max_probability`
-  // (in (0, 1)) with the fusion's parameters p (offset, min_views, drop rule) and occlusion
-  // tolerance k, given each camera's tiles (one per table camera). Returns the rows skipped.
-  size_t skippableRows(const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p, int k,
-                       double max_probability, std::vector<uint8_t>* rows) const;
-  // Writes a skipped grid row: `fill`, or 0 where a voxel has fewer than min_views observing
-  // cameras (what the fusion gives it), the cameras in `absent` (a bit per camera) left out.
-  void fillRow(size_t row, uint8_t fill, int min_views, uint64_t absent, uint8_t* out) const;
+  // flags[(y + ny z) * chunks + a] = 1 where every voxel of chunk a (voxels 8a .. 8a + 7) of
+  // the grid row provably fuses below `max_probability` (in (0, 1)) with the fusion's
+  // parameters p (offset, min_views, drop rule) and occlusion tolerance k, given each camera's
+  // tiles (one per table camera); chunks = ProjectionTable::chunksPerRow(). Returns the voxels
+  // skipped.
+  size_t skippableChunks(const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p, int k,
+                         double max_probability, std::vector<uint8_t>* flags) const;
+  // Writes the flagged chunks of a grid row (flags: the row's chunk flags; out: the row):
+  // `fill`, or 0 where a voxel has fewer than min_views observing cameras (what the fusion
+  // gives it), the cameras in `absent` (a bit per camera) left out.
+  void fillChunks(size_t row, const uint8_t* flags, uint8_t fill, int min_views, uint64_t absent,
+                  uint8_t* out) const;
 
  private:
   enum : uint8_t { kNone = 0, kAll = 1, kMixed = 2 };
@@ -103,10 +112,12 @@ class EmptySpaceBound {
   };
 
   uint64_t revision_ = 0;
-  int nx_ = 0, ny_ = 0, nz_ = 0, cx_ = 0, cy_ = 0, cz_ = 0, cameras_ = 0;
+  int nx_ = 0, ny_ = 0, nz_ = 0, cx_ = 0, cy_ = 0, cz_ = 0, chunks_ = 0, cameras_ = 0;
   std::vector<CellView> cells_;  // [(cell index) * cameras + c], cell = X + cx (Y + cy Z)
   std::vector<CellSummary> summaries_;  // [cell index]
   std::vector<uint64_t> seen_;           // per voxel (grid order): a bit per observing camera
+  std::vector<uint8_t> views_seen_;      // per voxel: how many bits seen_ has
+  std::vector<uint8_t> chunk_views_;     // per row and chunk: the fewest views_seen_ of its voxels
 };
 
 // Whether a fusion with these options skips empty space (PsfsOptions::skip_empty_below: the
@@ -124,22 +135,23 @@ struct EmptySkipCache {
   EmptySpaceBound bound;
   std::vector<TileMaxImage> tiles;
   double last_fraction = 0.0;
-  uint8_t fill = 0;     // what skipped voxels are set to (skippedRows)
+  uint8_t fill = 0;     // what skipped voxels are set to (skippedChunks)
   uint64_t absent = 0;  // views switched off as a whole this frame, a bit per camera
 };
 
-// The rows a fusion with options o (skip_empty_below > 0, multi-projection) skips this frame,
-// from cache->tiles (set by the caller): rows[y + ny z] = 1 (never below the floor's layer,
-// which the fusion sets to 0 anyway); and cache->fill, the byte a voxel fuses to when every
-// camera shows it its commonest byte (the background's posterior: what empty space far from
-// the person is), at most the level's. Returns the skipped fraction. Skipped rows are written
-// with cache->bound.fillRow(row, cache->fill, o.min_views, cache->absent, ...).
-double skippedRows(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
-                   std::vector<uint8_t>* rows);
-// For a fusion that computed every row (the GPU's): writes the rows that PsfsFusion skips as it
-// does (fillRow), so both give the same bytes. cache->tiles must hold this frame's tiles.
-void fillSkippedRows(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
-                     ProbabilityVolume* out);
+// The chunks a fusion with options o (skip_empty_below > 0, multi-projection) skips this
+// frame, from cache->tiles (set by the caller): flags[row * chunksPerRow() + chunk] = 1 (never
+// below the floor's layer, which the fusion sets to 0 anyway); and cache->fill, the byte a voxel
+// fuses to when every camera shows it its commonest byte (the background's posterior: what
+// empty space far from the person is), at most the level's. Returns the skipped fraction of the
+// voxels. Skipped chunks are written with cache->bound.fillChunks(row, flags of the row,
+// cache->fill, o.min_views, cache->absent, ...).
+double skippedChunks(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
+                     std::vector<uint8_t>* flags);
+// For a fusion that computed every voxel (the GPU's): writes the chunks that PsfsFusion skips
+// as it does (fillChunks), so both give the same bytes. cache->tiles must hold this frame's tiles.
+void fillSkipped(const PsfsOptions& o, const ProjectionTable& table, EmptySkipCache* cache,
+                 ProbabilityVolume* out);
 
 }  // namespace detail
 }  // namespace psfs

@@ -74,31 +74,49 @@ void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& 
 // busier core takes fewer (the extra layer per slab costs a third of a layer's lookups, plus
 // its projections for a table projected on the fly). Slabs are at least 2 layers deep, so a
 // grid of nz layers uses at most nz / 2 threads.
-// fn(row, centres, offsets, yface, zface) with the buffers as the face kernels take them.
-// skip (optional, one flag per row): rows flagged 1 are not fused but handed to skip_fn(row);
-// the faces a computed row needs from a skipped neighbour (the row before it in y, the same
-// row in the layer below) are sampled with plusFacesOfRow first, so a computed row is the same
-// bytes whatever is skipped. With skip, a slab's first layer also takes the faces from below
-// only for the rows it computes.
+// fn(row, centres, offsets, yface, zface, span) with the buffers as the face kernels take them,
+// once per span of the row to compute.
+// skip (optional, one flag per row and chunk of the table: skip[row * chunksPerRow() + chunk]):
+// chunks flagged 1 are not fused; each run of unflagged chunks is a span, its x carry taken
+// from the voxel before it (plusXFaces), and skip_fn(row) is called once for a row with any
+// flagged chunk (after its spans) to write those. The faces a span needs from a neighbour
+// that did not compute them (the row before it in y, the same row in the layer below) are
+// sampled with plusFacesOfRow first, so a computed voxel is the same bytes whatever is skipped.
+// With skip, a slab's first layer also takes the faces from below only where it computes.
 template <class Fn, class SkipFn>
 void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>& views,
                     int threads, const Fn& fn, const uint8_t* skip, const SkipFn& skip_fn) {
   const int ny = table.grid().dims.y(), nz = table.grid().dims.z();
   const int nxp = table.paddedRowLength(), C = table.numCameras();
+  const int chunks = table.chunksPerRow();
+  constexpr int kChunk = ProjectionTable::kChunk;
   const size_t row_faces = size_t(C) * nxp;
   const int T = resolveThreads(threads);
   const int depth = T == 1 ? nz : std::max(2, (nz + 3 * T - 1) / (3 * T));
   const int slabs = (nz + depth - 1) / depth;
+  const std::vector<uint8_t> none(size_t(chunks), 0);
 #pragma omp parallel num_threads(T)
   {
     std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
     std::vector<uint32_t> os(table.precomputed() ? 0 : table.offsetScratchSize());
     // + 16: the vector kernels read whole vectors past the last camera's row.
     std::vector<uint16_t> yface(row_faces + 16), zface(row_faces * ny + 16);
-    std::vector<uint8_t> zface_ok(size_t(ny), 1);  // the slot holds the layer below's + z faces
-    auto plusFaces = [&](size_t r, int axis, uint16_t* faces) {
-      plusFacesOfRow(views.data(), C, nxp, table.rowCentres(r, cs.data()), table.rowOffsets(r, os.data()),
-                     axis, faces);
+    // Per chunk: the slot holds the + faces of the previous row (y) / of the layer below (z).
+    std::vector<uint8_t> yface_ok(size_t(chunks), 1), zface_ok(size_t(ny) * chunks, 1);
+    std::vector<int32_t> x_carry(static_cast<size_t>(C));
+    // The + faces along `axis` of row r into `faces` for the chunks computed now (flags 0)
+    // that `ok` does not hold; ok then says what row r + 1 (or the layer above) finds.
+    auto resample = [&](size_t r, int axis, uint16_t* faces, uint8_t* ok, const uint8_t* flags) {
+      const uint32_t* cen = nullptr;
+      const uint32_t* off = nullptr;
+      for (int a = 0; a < chunks;) {
+        if (flags[a] || ok[a]) { ++a; continue; }
+        int b = a + 1;
+        while (b < chunks && !flags[b] && !ok[b]) ++b;
+        if (!cen) cen = table.rowCentres(r, cs.data()), off = table.rowOffsets(r, os.data());
+        plusFacesOfRow(views.data(), C, nxp, cen, off, axis, faces, a * kChunk, b * kChunk);
+        a = b;
+      }
     };
 #pragma omp for schedule(dynamic, 1)
     for (int sl = 0; sl < slabs; ++sl) {
@@ -110,35 +128,51 @@ void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>&
         std::fill(zface_ok.begin(), zface_ok.end(), uint8_t(0));
       } else {
         for (int y = 0; y < ny; ++y)
-          plusFaces(size_t(y) + size_t(ny) * (z0 - 1), 2, &zface[size_t(y) * row_faces]);
+          plusFacesOfRow(views.data(), C, nxp, table.rowCentres(size_t(y) + size_t(ny) * (z0 - 1), cs.data()),
+                         table.rowOffsets(size_t(y) + size_t(ny) * (z0 - 1), os.data()), 2,
+                         &zface[size_t(y) * row_faces]);
       }
       for (int z = z0; z < z1; ++z) {
         std::fill(yface.begin(), yface.end(), kNoFace);
-        bool yface_ok = true;
+        std::fill(yface_ok.begin(), yface_ok.end(), uint8_t(1));
         for (int y = 0; y < ny; ++y) {
           const size_t r = size_t(y) + size_t(ny) * z;
-          if (skip && skip[r]) {
-            skip_fn(r);
-            yface_ok = false;
-            zface_ok[size_t(y)] = 0;
-            continue;
+          const uint8_t* flags = skip ? skip + r * size_t(chunks) : none.data();
+          uint8_t* zok = &zface_ok[size_t(y) * chunks];
+          uint16_t* zf = &zface[size_t(y) * row_faces];
+          const int flagged = int(std::count(flags, flags + chunks, uint8_t(1)));
+          if (flagged < chunks) {
+            if (y > 0) resample(r - 1, 1, yface.data(), yface_ok.data(), flags);
+            if (z > 0) resample(r - size_t(ny), 2, zf, zok, flags);
+            const uint32_t* cen = table.rowCentres(r, cs.data());
+            const uint32_t* off = table.rowOffsets(r, os.data());
+            for (int a = 0; a < chunks;) {
+              if (flags[a]) { ++a; continue; }
+              int b = a + 1;
+              while (b < chunks && !flags[b]) ++b;
+              if (a > 0) plusXFaces(views.data(), C, nxp, cen, off, a * kChunk - 1, x_carry.data());
+              fn(r, cen, off, yface.data(), zf, RowSpan{a * kChunk, b * kChunk, a > 0 ? x_carry.data() : nullptr});
+              a = b;
+            }
           }
-          if (!yface_ok) plusFaces(r - 1, 1, yface.data());
-          if (!zface_ok[size_t(y)]) plusFaces(r - size_t(ny), 2, &zface[size_t(y) * row_faces]);
-          yface_ok = true;
-          zface_ok[size_t(y)] = 1;
-          fn(r, table.rowCentres(r, cs.data()), table.rowOffsets(r, os.data()), yface.data(),
-             &zface[size_t(y) * row_faces]);
+          for (int a = 0; a < chunks; ++a) yface_ok[size_t(a)] = zok[a] = uint8_t(!flags[a]);
+          if (flagged > 0) skip_fn(r);
         }
       }
     }
   }
 }
 
+// Every row whole, fn(row, centres, offsets, yface, zface).
 template <class Fn>
 void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>& views,
                     int threads, const Fn& fn) {
-  forEachFaceRow(table, views, threads, fn, nullptr, [](size_t) {});
+  forEachFaceRow(
+      table, views, threads,
+      [&](size_t r, const uint32_t* cen, const uint32_t* off, uint16_t* yf, uint16_t* zf, const RowSpan&) {
+        fn(r, cen, off, yf, zf);
+      },
+      nullptr, [](size_t) {});
 }
 
 inline std::vector<KernelView> kernelViews(const ViewEvidence& e) {

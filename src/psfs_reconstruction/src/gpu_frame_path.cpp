@@ -75,12 +75,12 @@ void GpuFramePath::buildEvidence(const std::vector<bool>& camera_active,
 void GpuFramePath::fuseBody(const ProjectionTable& table, ProbabilityVolume* out) {
   body_.fuse(table, pixels_.bodyEvidence(), out);
   if (detail::skipsEmptySpace(body_.options()))
-    detail::fillSkippedRows(body_.options(), table, &body_skip_, out);
+    detail::fillSkipped(body_.options(), table, &body_skip_, out);
 }
 void GpuFramePath::fuseSkin(const ProjectionTable& table, ProbabilityVolume* out) {
   skin_.fuse(table, pixels_.skinEvidence(), out);
   if (detail::skipsEmptySpace(skin_.options()))
-    detail::fillSkippedRows(skin_.options(), table, &skin_skip_, out);
+    detail::fillSkipped(skin_.options(), table, &skin_skip_, out);
 }
 void GpuFramePath::fuseHand(const ProjectionTable& table, ProbabilityVolume* out) {
   hand_.fuse(table, pixels_.skinEvidence(), out);

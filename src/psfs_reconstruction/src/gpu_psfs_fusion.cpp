@@ -151,7 +151,7 @@ void GpuPsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evide
   run(table, views.data(), nullptr, out);
   if (detail::skipsEmptySpace(options_)) {  // the device fused every row: fill PsfsFusion's skipped ones
     detail::tileMaxImages(evidence, options_.threads, &impl_->skip.tiles);
-    detail::fillSkippedRows(options_, table, &impl_->skip, out);
+    detail::fillSkipped(options_, table, &impl_->skip, out);
   }
 }
 

@@ -25,6 +25,7 @@
 
 #include <hwy/highway.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -196,7 +197,7 @@ HWY_INLINE VI shiftUpOne(VI v, int32_t first, const Indices& up) {
 
 template <int K>
 void faceRowHwy(const PsfsRowParams& p, const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
-                uint16_t* zface, uint8_t* out) {
+                uint16_t* zface, uint8_t* out, const RowSpan& span) {
   const DI di;
   const DU du;
   const int lanes = static_cast<int>(hn::Lanes(di));
@@ -205,15 +206,18 @@ void faceRowHwy(const PsfsRowParams& p, const uint32_t* centres, const uint32_t*
   HWY_ALIGN static constexpr int32_t kUp[16] = {0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14};
   const auto up = hn::SetTableIndices(di, kUp);
   thread_local std::vector<int32_t> carry_store;
-  carry_store.assign(size_t(p.num_cameras), -1);
+  carry_store.resize(size_t(p.num_cameras));
   int32_t* carry = carry_store.data();  // +x face of voxel x0 - 1 per camera, -1: not observed
+  for (int c = 0; c < p.num_cameras; ++c) carry[c] = span.x_carry ? span.x_carry[c] : -1;
   // The row's projections are read once per frame: fetch them without letting them push the
   // evidence images (gathered every frame) out of the caches.
-  for (int i = 0; i < p.num_cameras * p.nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
-  for (int x0 = 0; x0 < p.nxp; x0 += lanes) {
-    // nxp holds whole chunks of 8: only 16 lanes can overhang it (by one chunk), and those
+  for (int c = 0; c < p.num_cameras; ++c)
+    for (int x = span.begin; x < span.end; x += 16) __builtin_prefetch(centres + c * p.nxp + x, 0, 0);
+  const int last = std::min(span.end, p.nx);
+  for (int x0 = span.begin; x0 < span.end; x0 += lanes) {
+    // A span holds whole chunks of 8: only 16 lanes can overhang it (by one chunk), and those
     // lanes load centre 0 (sampled in bounds, never stored).
-    const int left = p.nxp - x0;
+    const int left = span.end - x0;
     const bool whole = left >= lanes;
     const int chunk = x0 / ProjectionTable::kChunk;
     VI sum = zero, inactive = zero;
@@ -249,7 +253,7 @@ void faceRowHwy(const PsfsRowParams& p, const uint32_t* centres, const uint32_t*
       accumulateTerm<K>(hn::IfThenElse(off_view, no_ev, tm), sum, inactive, m);
     }
     // Fewer than 8 lanes: the row's last vectors may hold only padding.
-    if (x0 < p.nx) finaliseLanes<K>(p, sum, inactive, m, out + x0, p.nx - x0);
+    if (x0 < last) finaliseLanes<K>(p, sum, inactive, m, out + x0, last - x0);
   }
 }
 

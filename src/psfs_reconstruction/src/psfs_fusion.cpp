@@ -129,15 +129,16 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
     if (detail::skipsEmptySpace(options_)) {
       lock = std::unique_lock<std::mutex>(skip_->mutex);
       detail::tileMaxImages(evidence, options_.threads, &skip_->tiles);
-      detail::skippedRows(options_, table, skip_.get(), &skip);
+      detail::skippedChunks(options_, table, skip_.get(), &skip);
     }
     detail::forEachFaceRow(
         table, views, options_.threads,
-        [&](size_t r, const uint32_t* centres, const uint32_t* offsets, uint16_t* yface, uint16_t* zface) {
-          face_fn(p, centres, offsets, yface, zface, dst + r * p.nx);
-        },
-        skip.empty() ? nullptr : skip.data(),
-        [&](size_t r) { skip_->bound.fillRow(r, skip_->fill, p.min_views, skip_->absent, dst + r * p.nx); });
+        [&](size_t r, const uint32_t* centres, const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
+            const detail::RowSpan& span) { face_fn(p, centres, offsets, yface, zface, dst + r * p.nx, span); },
+        skip.empty() ? nullptr : skip.data(), [&](size_t r) {
+          skip_->bound.fillChunks(r, &skip[r * size_t(p.chunks)], skip_->fill, p.min_views, skip_->absent,
+                                  dst + r * p.nx);
+        });
   } else {
     const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
     detail::forEachRow(

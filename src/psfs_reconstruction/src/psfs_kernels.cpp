@@ -35,13 +35,13 @@ constexpr float kLnP[7] = {kLnP0, kLnP1, kLnP2, kLnP3, kLnP4, kLnP5, kLnP6};
 // ---------------------------------------------------------------------------- scalar -------
 // The reference kernels: the per-voxel arithmetic of voxel_arithmetic.h (the GPU's too).
 
-// One camera's walk over one row (psfs_kernels.h): the median pair of every voxel x < nxp
-// (scratch for unobserved ones) and the row's +y / +z faces into yf / zf.
-// off: this camera's chunk offsets of the row, [chunk * 3 + axis].
-void facePairsScalar(const KernelView& v, int nxp, const uint32_t* cen, const uint32_t* off,
-                     uint16_t* yf, uint16_t* zf, int32_t* pairs) {
-  int32_t carry = -1;  // +x face of the previous voxel, -1 if it is not observed
-  for (int x = 0; x < nxp; ++x) {
+// One camera's walk over the voxels [begin, end) of one row (psfs_kernels.h): the median pair
+// of each (scratch for unobserved ones) and the row's +y / +z faces into yf / zf.
+// off: this camera's chunk offsets of the row, [chunk * 3 + axis]; carry: the +x face of voxel
+// begin - 1 (-1 if it is not observed or begin is 0).
+void facePairsScalar(const KernelView& v, int begin, int end, const uint32_t* cen, const uint32_t* off,
+                     uint16_t* yf, uint16_t* zf, int32_t* pairs, int32_t carry) {
+  for (int x = begin; x < end; ++x) {
     const uint32_t uv = cen[x];
     const bool obs = uv != v.not_observed;
     const uint32_t* o = off + (x / ProjectionTable::kChunk) * 3;
@@ -78,11 +78,14 @@ void rowScalar(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
 
 template <int K>
 void faceRowScalar(const PsfsRowParams& p, const uint32_t* centres, const uint32_t* offsets,
-                   uint16_t* yface, uint16_t* zface, uint8_t* out) {
+                   uint16_t* yface, uint16_t* zface, uint8_t* out, const RowSpan& span) {
   thread_local std::vector<int32_t> pairs;
   pairs.resize(size_t(p.num_cameras) * p.nxp);
-  medianPairsOfRow(p.views, p.num_cameras, p.nxp, centres, offsets, yface, zface, pairs.data());
-  for (int x = 0; x < p.nx; ++x)
+  for (int c = 0; c < p.num_cameras; ++c)
+    facePairsScalar(p.views[c], span.begin, span.end, centres + c * p.nxp, offsets + c * p.chunks * 3,
+                    yface + c * p.nxp, zface + c * p.nxp, pairs.data() + size_t(c) * p.nxp,
+                    span.x_carry ? span.x_carry[c] : -1);
+  for (int x = span.begin; x < std::min(span.end, p.nx); ++x)
     out[x] = fuseTermsScalar<K>(p, [&](int c) {
       return faceTerm(centreTerm(p.views[c], centres[c * p.nxp + x]), pairs[size_t(c) * p.nxp + x]);
     });
@@ -224,23 +227,31 @@ PSFS_AVX2 __m256i centreTermAvx2(const KernelView& v, __m256i uv) {
 
 // The row's projections are read once per frame: fetch them without letting them push the
 // evidence images (gathered every frame) out of the caches.
-inline void prefetchRow(const PsfsRowParams& p, const uint32_t* centres) {
-  for (int i = 0; i < p.num_cameras * p.nxp; i += 16)
-    _mm_prefetch(reinterpret_cast<const char*>(centres + i), _MM_HINT_NTA);
+inline void prefetchRow(const PsfsRowParams& p, const uint32_t* centres, const RowSpan& span) {
+  for (int c = 0; c < p.num_cameras; ++c)
+    for (int x = span.begin; x < span.end; x += 16)
+      _mm_prefetch(reinterpret_cast<const char*>(centres + c * p.nxp + x), _MM_HINT_NTA);
+}
+
+// The +x face carried into a span's first voxel per camera.
+inline void startCarry(const PsfsRowParams& p, const RowSpan& span, int32_t* carry) {
+  for (int c = 0; c < p.num_cameras; ++c) carry[c] = span.x_carry ? span.x_carry[c] : -1;
 }
 
 template <int K>
 __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, const uint32_t* centres,
                                                      const uint32_t* offsets, uint16_t* yface,
-                                                     uint16_t* zface, uint8_t* out) {
+                                                     uint16_t* zface, uint8_t* out, const RowSpan& span) {
   const __m256i no_ev = _mm256_set1_epi32(kNoEv);
   const __m256i pad = _mm256_set1_epi32(kPad16);
   const __m256i shift1 = _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6);
   thread_local std::vector<int32_t> carry_store;
-  carry_store.assign(size_t(p.num_cameras), -1);
+  carry_store.resize(size_t(p.num_cameras));
   int32_t* carry = carry_store.data();  // +x face of voxel x0 - 1 per camera, -1: not observed
-  prefetchRow(p, centres);
-  for (int x0 = 0; x0 < p.nxp; x0 += 8) {
+  startCarry(p, span, carry);
+  prefetchRow(p, centres, span);
+  const int last = std::min(span.end, p.nx);
+  for (int x0 = span.begin; x0 < span.end; x0 += 8) {
     const int chunk = x0 / ProjectionTable::kChunk;
     __m256i sum = _mm256_setzero_si256(), inactive = _mm256_setzero_si256();
     __m256i m[K > 0 ? K : 1];
@@ -277,7 +288,7 @@ __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, con
       const __m256i off_view = v.has_mask ? _mm256_cmpgt_epi32(centreTermAvx2(v, uv), _mm256_setzero_si256()) : unobs;
       accumulateAvx2<K>(_mm256_blendv_epi8(tm, no_ev, off_view), sum, inactive, m);
     }
-    finaliseAvx2<K>(p, sum, inactive, m, out + x0, p.nx - x0);  // x0 < nx: nxp - nx < 8
+    finaliseAvx2<K>(p, sum, inactive, m, out + x0, last - x0);  // x0 < last: nxp - nx < 8
   }
 }
 
@@ -426,15 +437,17 @@ PSFS_AVX512 __m512i chunkOffsets512(const uint32_t* off0, const uint32_t* off1, 
 template <int K>
 __attribute__((target("avx512f,avx512bw,avx2,fma"))) void faceRowAvx512(
     const PsfsRowParams& p, const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
-    uint16_t* zface, uint8_t* out) {
+    uint16_t* zface, uint8_t* out, const RowSpan& span) {
   const __m512i no_ev = _mm512_set1_epi32(kNoEv);
   const __m512i pad = _mm512_set1_epi16(kPad16);
   thread_local std::vector<int32_t> carry_store;
-  carry_store.assign(size_t(p.num_cameras), -1);
+  carry_store.resize(size_t(p.num_cameras));
   int32_t* carry = carry_store.data();  // +x face of voxel x0 - 1 per camera, -1: not observed
-  prefetchRow(p, centres);
-  for (int x0 = 0; x0 < p.nxp; x0 += 16) {
-    const bool two = x0 + 8 < p.nxp;
+  startCarry(p, span, carry);
+  prefetchRow(p, centres, span);
+  const int last = std::min(span.end, p.nx);
+  for (int x0 = span.begin; x0 < span.end; x0 += 16) {
+    const bool two = x0 + 8 < span.end;
     const __mmask16 lanes = two ? __mmask16(0xFFFF) : __mmask16(0x00FF);
     const int chunk = x0 / ProjectionTable::kChunk;
     __m512i sum = _mm512_setzero_si512(), inactive = _mm512_setzero_si512();
@@ -468,18 +481,18 @@ __attribute__((target("avx512f,avx512bw,avx2,fma"))) void faceRowAvx512(
                                             : static_cast<__mmask16>(~obs);
       accumulate512<K>(_mm512_mask_mov_epi32(tm, off_view, no_ev), sum, inactive, m);
     }
-    finalise512<K>(p, sum, inactive, m, out + x0, p.nx - x0);  // x0 < nx: nxp - nx < 8
+    finalise512<K>(p, sum, inactive, m, out + x0, last - x0);  // x0 < last: nxp - nx < 8
   }
 }
 
 // + faces of one row along one axis (plusFacesOfRow), 16 voxels at a time.
 __attribute__((target("avx512f,avx512bw,avx2,fma"))) void plusFaces512(
     const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
-    const uint32_t* offsets, int axis, uint16_t* faces) {
+    const uint32_t* offsets, int axis, uint16_t* faces, int x_begin, int x_end) {
   const int chunks = nxp / ProjectionTable::kChunk;
   for (int c = 0; c < num_cameras; ++c)
-    for (int x0 = 0; x0 < nxp; x0 += 16) {
-      const bool two = x0 + 8 < nxp;
+    for (int x0 = x_begin; x0 < x_end; x0 += 16) {
+      const bool two = x0 + 8 < x_end;
       const __mmask16 lanes = two ? __mmask16(0xFFFF) : __mmask16(0x00FF);
       const __m512i uv = loadCentres512(centres + c * nxp + x0, two);
       const __mmask16 obs = lanes & _mm512_cmpneq_epi32_mask(uv, _mm512_set1_epi32(static_cast<int>(views[c].not_observed)));
@@ -543,20 +556,32 @@ PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector) {
 }
 
 void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
-                    const uint32_t* offsets, int axis, uint16_t* faces) {
+                    const uint32_t* offsets, int axis, uint16_t* faces, int x_begin, int x_end) {
+  if (x_end < 0) x_end = nxp;
 #if PSFS_HAVE_X86_DISPATCH
   if (useAvx512()) {
-    plusFaces512(views, num_cameras, nxp, centres, offsets, axis, faces);
+    plusFaces512(views, num_cameras, nxp, centres, offsets, axis, faces, x_begin, x_end);
     return;
   }
 #endif
   const int chunks = nxp / ProjectionTable::kChunk;
   for (int c = 0; c < num_cameras; ++c)
-    for (int x = 0; x < nxp; ++x) {
+    for (int x = x_begin; x < x_end; ++x) {
       const uint32_t uv = centres[c * nxp + x];
       const uint32_t off = offsets[(c * chunks + x / ProjectionTable::kChunk) * 3 + axis];
       faces[c * nxp + x] = uv == views[c].not_observed ? kNoFace : static_cast<uint16_t>(plusFace(views[c], uv, off));
     }
+}
+
+void plusXFaces(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
+                const uint32_t* offsets, int x, int32_t* carry) {
+  const int chunks = nxp / ProjectionTable::kChunk;
+  for (int c = 0; c < num_cameras; ++c) {
+    const uint32_t uv = centres[c * nxp + x];
+    carry[c] = uv == views[c].not_observed
+                   ? -1
+                   : plusFace(views[c], uv, offsets[(c * chunks + x / ProjectionTable::kChunk) * 3]);
+  }
 }
 
 void medianPairsOfRow(const KernelView* views, int num_cameras, int nxp,
@@ -564,8 +589,8 @@ void medianPairsOfRow(const KernelView* views, int num_cameras, int nxp,
                       uint16_t* zface, int32_t* pairs) {
   const int chunks = nxp / ProjectionTable::kChunk;
   for (int c = 0; c < num_cameras; ++c)
-    facePairsScalar(views[c], nxp, centres + c * nxp, offsets + c * chunks * 3, yface + c * nxp,
-                    zface + c * nxp, pairs + size_t(c) * nxp);
+    facePairsScalar(views[c], 0, nxp, centres + c * nxp, offsets + c * chunks * 3, yface + c * nxp,
+                    zface + c * nxp, pairs + size_t(c) * nxp, -1);
 }
 
 int observeByte(const KernelView& view, const uint8_t* likelihood, uint32_t centre) {

@@ -83,9 +83,20 @@ auto byOcclusion(int k, F&& f) {
 // kNoFace (voxel_arithmetic.h) in a buffer (the value of a face whose lower voxel is missing or
 // unobserved) makes the kernel sample the face from the upper voxel. voxelMedianPair
 // (voxel_arithmetic.h) is the same rule for one voxel without a walk (the GPU's threads).
+//
+// A kernel computes the span [begin, end) of the row (RowSpan): whole chunks of the table's
+// offsets. Its first voxel's -x face is span.x_carry[c], the +x face of voxel begin - 1 as the
+// walk left it (plusXFaces), so a span's voxels and faces are the bytes of the whole row's walk;
+// only the span's entries of out, yface and zface are read or written. Empty-space skipping
+// (fusion_common.h: forEachFaceRow) computes the spans that pass the person.
+struct RowSpan {
+  int begin = 0, end = 0;              // multiples of ProjectionTable::kChunk, end <= nxp
+  const int32_t* x_carry = nullptr;    // per camera, -1: not observed; nullptr: none (begin 0)
+};
+inline RowSpan wholeRow(const PsfsRowParams& p) { return RowSpan{0, p.nxp, nullptr}; }
 using PsfsFaceRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres,
                                const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
-                               uint8_t* out);
+                               uint8_t* out, const RowSpan& span);
 PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector);
 // The Highway face kernels (psfs_face_hwy.cpp), for the targets of hwyRowTargets().
 PsfsFaceRowFn hwyFaceRowKernel(int64_t target, int k);
@@ -94,10 +105,16 @@ PsfsFaceRowFn hwyFaceRowKernel(int64_t target, int k);
 // else this Highway target's).
 void forceFaceRowKernelForTest(int64_t target);
 
-// The + faces along `axis` (1 = y, 2 = z) of one row, all cameras, into faces[c * nxp + x]:
-// what a walk that starts in the middle of the grid needs from the row below its first one.
+// The + faces along `axis` (1 = y, 2 = z) of one row, all cameras, into faces[c * nxp + x]
+// for x in [x_begin, x_end) (multiples of kChunk; default the whole row): what a walk that
+// starts in the middle of the grid, or a span whose neighbour was not computed, needs from the
+// row below.
 void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
-                    const uint32_t* offsets, int axis, uint16_t* faces);
+                    const uint32_t* offsets, int axis, uint16_t* faces, int x_begin = 0, int x_end = -1);
+// The +x faces of voxel x of one row per camera into carry[c] (-1 where it is not observed):
+// RowSpan::x_carry of a span that starts at x + 1.
+void plusXFaces(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
+                const uint32_t* offsets, int x, int32_t* carry);
 
 // Reference variants: per camera and voxel of one row, the sum of the two middle face samples
 // (0 .. 2 * 255 * 256; pairs[c * nxp + x]; unobserved voxels get an unspecified value), with

@@ -2,7 +2,7 @@
 // every skipped voxel is one whose posterior without skipping lies below the level, every
 // other voxel is the same byte, on the simulated rig's frames (synthetic classifier-like
 // likelihoods and the real pipeline), with occlusion tolerance, masked views, on-the-fly tables
-// and any thread count. The figures printed are the skipped share of the grid's rows.
+// and any thread count. The figures printed are the skipped share of the grid's voxels.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,40 +24,45 @@ namespace {
 
 namespace sim = tabletop_sim;
 
-// The rule, exactly: the rows the bound skips hold its fill (0 where a voxel has fewer than
-// min_views cameras), and each of their voxels was at most the level's byte without skipping
-// (the bound's soundness); every other row is the full fusion's bytes. Returns the voxels that
-// differ from the full fusion.
+// The rule, exactly: the chunks (8 voxels of a row) the bound skips hold its fill (0 where a
+// voxel has fewer than min_views cameras), and each of their voxels was at most the level's
+// byte without skipping (the bound's soundness); every other voxel is the full fusion's byte.
+// Returns the voxels that differ from the full fusion.
 size_t expectSkippingRule(const ProjectionTable& table, const ViewEvidence& ev, const PsfsOptions& skipping,
                           const ProbabilityVolume& full, const ProbabilityVolume& skipped, const std::string& what) {
   EXPECT_EQ(full.data.size(), skipped.data.size()) << what;
   if (full.data.size() != skipped.data.size()) return 0;
   detail::EmptySkipCache cache;
   detail::tileMaxImages(ev, 1, &cache.tiles);
-  std::vector<uint8_t> rows;
-  detail::skippedRows(skipping, table, &cache, &rows);
-  const size_t nx = size_t(table.grid().dims.x());
+  std::vector<uint8_t> flags;
+  detail::skippedChunks(skipping, table, &cache, &flags);
+  const size_t nx = size_t(table.grid().dims.x()), chunks = size_t(table.chunksPerRow());
   // A posterior below the level rounds to at most this byte (the exp table rounds to nearest).
   const int level_byte = int(skipping.skip_empty_below * 255.0 + 0.5);
   std::vector<uint8_t> fill_row(nx);
-  size_t changed = 0, bad_rows = 0, unsound = 0;
-  for (size_t r = 0; r < rows.size(); ++r) {
+  size_t changed = 0, bad_computed = 0, bad_fill = 0, unsound = 0;
+  for (size_t r = 0; r < table.grid().numRows(); ++r) {
     const uint8_t* a = full.data.data() + r * nx;
     const uint8_t* b = skipped.data.data() + r * nx;
-    for (size_t x = 0; x < nx; ++x) changed += a[x] != b[x];
-    if (!rows[r]) {
-      if (!std::equal(a, a + nx, b) && ++bad_rows <= 3) ADD_FAILURE() << what << ": computed row " << r << " differs";
-      continue;
-    }
-    cache.bound.fillRow(r, cache.fill, skipping.min_views, cache.absent, fill_row.data());
-    if (!std::equal(fill_row.begin(), fill_row.end(), b) && ++bad_rows <= 3)
-      ADD_FAILURE() << what << ": skipped row " << r << " is not the fill " << int(cache.fill);
-    for (size_t x = 0; x < nx; ++x)
+    const uint8_t* f = &flags[r * chunks];
+    std::fill(fill_row.begin(), fill_row.end(), uint8_t(0));
+    cache.bound.fillChunks(r, f, cache.fill, skipping.min_views, cache.absent, fill_row.data());
+    for (size_t x = 0; x < nx; ++x) {
+      changed += a[x] != b[x];
+      if (!f[x / ProjectionTable::kChunk]) {
+        if (a[x] != b[x] && ++bad_computed <= 3)
+          ADD_FAILURE() << what << ": computed voxel " << x << " of row " << r << " differs";
+        continue;
+      }
+      if (fill_row[x] != b[x] && ++bad_fill <= 3)
+        ADD_FAILURE() << what << ": skipped voxel " << x << " of row " << r << " is not the fill " << int(cache.fill);
       if (a[x] > level_byte && ++unsound <= 3)
         ADD_FAILURE() << what << ": skipped voxel " << r * nx + x << " was " << int(a[x]) << " (level byte "
                       << level_byte << ")";
+    }
   }
-  EXPECT_EQ(bad_rows, 0u) << what;
+  EXPECT_EQ(bad_computed, 0u) << what;
+  EXPECT_EQ(bad_fill, 0u) << what;
   EXPECT_EQ(unsound, 0u) << what;
   return changed;
 }
@@ -84,7 +89,7 @@ const SimViews& simViews() {
   return v;
 }
 
-TEST(EmptySpaceSkipping, SkipsOnlyRowsBelowTheLevelAndLeavesTheRestByteForByte) {
+TEST(EmptySpaceSkipping, SkipsOnlyVoxelsBelowTheLevelAndLeavesTheRestByteForByte) {
   const SimViews& s = simViews();
   ProjectionTableOptions to;
   to.multi_projection = true;
@@ -102,14 +107,14 @@ TEST(EmptySpaceSkipping, SkipsOnlyRowsBelowTheLevelAndLeavesTheRestByteForByte) 
         PsfsOptions os = o;
         os.skip_empty_below = level;
         const PsfsFusion full(o), skipping(os);
-        double skipped_rows = 0;
+        double skipped = 0;
         for (size_t f = 0; f < s.frames[cls].size(); ++f) {
           ViewEvidence ev;
           ev.set(s.frames[cls][f], true);
           ProbabilityVolume a, b, c;
           full.fuse(table, ev, &a);
           skipping.fuse(table, ev, &b);
-          skipped_rows += skipping.lastSkippedFraction() / s.frames[cls].size();
+          skipped += skipping.lastSkippedFraction() / s.frames[cls].size();
           const std::string what = std::string(cls ? "skin" : "body") + " level " + std::to_string(level) +
                                    " threads " + std::to_string(threads) + " frame " + std::to_string(f);
           expectSkippingRule(table, ev, os, a, b, what);
@@ -117,18 +122,18 @@ TEST(EmptySpaceSkipping, SkipsOnlyRowsBelowTheLevelAndLeavesTheRestByteForByte) 
           EXPECT_EQ(b.data, c.data) << what << " (on-the-fly table)";
         }
         if (threads == 1)
-          std::printf("[ figures  ] %s, level %.1f: %.0f %% of the rows skipped\n", cls ? "skin" : "body", level,
-                      100.0 * skipped_rows);
+          std::printf("[ figures  ] %s, level %.1f: %.0f %% of the voxels skipped\n", cls ? "skin" : "body", level,
+                      100.0 * skipped);
         // The bound is not vacuous: most of the workspace is empty in the default rig's views
         // (these likelihoods' background is 0.1-0.2, above the lower levels).
         if (level == 0.5) {
-          EXPECT_GT(skipped_rows, 0.3) << (cls ? "skin" : "body");
+          EXPECT_GT(skipped, 0.3) << (cls ? "skin" : "body");
         }
       }
 }
 
-// Every face kernel (the reference, Highway's, the hand-written ones) re-samples the carried
-// faces the same way after a skipped row; a grid whose sides are not multiples of the cell or
+// Every face kernel (the reference, Highway's, the hand-written ones) computes spans of a row
+// and re-samples the carried faces the same way after a skipped chunk; a grid whose sides are not multiples of the cell or
 // the kernels' vectors; the layers under a floor (0 whatever is skipped).
 TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
   const SimViews& s = simViews();
@@ -183,7 +188,7 @@ TEST(EmptySpaceSkipping, AViewSwitchedOffAsAWholeIsLeftOut) {
   EXPECT_GT(skipping.lastSkippedFraction(), 0.3);
 }
 
-// The GPU paths fuse every row and then fill the ones PsfsFusion skips, with the bounds taken
+// The GPU paths fuse every voxel and then fill the chunks PsfsFusion skips, with the bounds taken
 // from the host's views (likelihood channel and masks) instead of the evidence: the same bytes.
 TEST(EmptySpaceSkipping, FillingAFullFusionGivesTheSkippingFusionsBytes) {
   const SimViews& s = simViews();
@@ -207,7 +212,7 @@ TEST(EmptySpaceSkipping, FillingAFullFusionGivesTheSkippingFusionsBytes) {
     PsfsFusion(os).fuse(table, ev, &skipped);
     detail::EmptySkipCache cache;
     detail::tileMaxImages(views, 1, &cache.tiles);  // the classifier's two-channel images
-    detail::fillSkippedRows(os, table, &cache, &full);
+    detail::fillSkipped(os, table, &cache, &full);
     EXPECT_EQ(full.data, skipped.data) << (cls ? "skin" : "body");
     EXPECT_GT(cache.last_fraction, 0.2) << (cls ? "skin" : "body");
   }

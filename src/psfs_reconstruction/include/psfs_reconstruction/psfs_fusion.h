@@ -104,7 +104,7 @@ struct PsfsOptions {
   // on-the-fly table is still projected whole.
   double floor_z = -std::numeric_limits<double>::infinity();
   // Empty-space skipping of the multi-projection test (the single-projection and footprint
-  // paths ignore it; 0 = off), in [0, threshold): grid rows whose
+  // paths ignore it; 0 = off), in [0, threshold): runs of 8 voxels along x whose
   // voxels a bound of the posterior (from the largest 2x2 minimum of the likelihood in the 8x8
   // pixel tiles around their footprints) puts below this level are not fused but set to the
   // background's posterior (every camera's commonest likelihood, fused: what empty space far
@@ -129,7 +129,7 @@ class PsfsFusion {
   // Throws std::invalid_argument if the evidence does not match the table (number of views,
   // image sizes) or lacks what the options need (multi-projection).
   void fuse(const ProjectionTable& table, const ViewEvidence& evidence, ProbabilityVolume* out) const;
-  // Fraction of the grid's rows the last fuse skipped (PsfsOptions::skip_empty_below; 0 without).
+  // Fraction of the grid's voxels the last fuse skipped (PsfsOptions::skip_empty_below; 0 without).
   double lastSkippedFraction() const;
 
  private:

@@ -121,9 +121,10 @@ struct ReconstructorParams {
   Backend backend = Backend::kCpu;
 
   // Empty space skipped below 0.5 (PsfsOptions::skip_empty_below): the hull and every voxel
-  // at or above 0.5 as without it, at about 0.6 of the multi-projection's cost on the default
+  // at or above 0.5 as without it, at about 0.4 of the multi-projection's cost on the default
   // rig; the trackers' figures over 96 generated scenarios unchanged in their medians
-  // (docs/benchmarks.md, "pSfS: empty-space skipping in the multi-projection test").
+  // (docs/benchmarks.md, "pSfS: empty-space skipping in the multi-projection test" and
+  // "... by chunks of 8 voxels").
   static PsfsOptions defaultBody() {
     PsfsOptions o;
     o.multi_projection = true;
