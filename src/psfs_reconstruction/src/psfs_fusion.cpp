@@ -125,7 +125,7 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
   if (options_.multi_projection) {
     const detail::PsfsFaceRowFn face_fn = detail::selectPsfsFaceRow(options_.occluded_views, vector);
     std::vector<uint8_t> skip;
-    std::unique_lock<std::mutex> lock;  // held through the fusion: skipped rows read the bound
+    std::unique_lock<std::mutex> lock;  // held through the fusion: skipped chunks read the bound
     if (detail::skipsEmptySpace(options_)) {
       lock = std::unique_lock<std::mutex>(skip_->mutex);
       detail::tileMaxImages(evidence, options_.threads, &skip_->tiles);

@@ -420,8 +420,8 @@ PSFS_AVX512 __m512i centreTerm512(const KernelView& v, __m512i uv) {
   return _mm512_srai_epi32(_mm512_slli_epi32(g, 16), 16);
 }
 
-// 16 packed centres, or 8 (upper lanes 0) at the end of a row that holds an odd number of
-// chunks. Masked loads only where needed: on Zen 4 a masked load that misses the cache costs
+// 16 packed centres, or 8 (upper lanes 0) at the end of a span (or row) that holds an odd
+// number of chunks. Masked loads only where needed: on Zen 4 a masked load that misses the cache costs
 // several times a plain one (measured without the row prefetch: 15 ms instead of 5 ms for
 // the 16 mm multi-projection volume, 1 thread).
 PSFS_AVX512 __m512i loadCentres512(const uint32_t* p, bool two) {

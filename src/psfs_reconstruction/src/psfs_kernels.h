@@ -87,13 +87,13 @@ auto byOcclusion(int k, F&& f) {
 // A kernel computes the span [begin, end) of the row (RowSpan): whole chunks of the table's
 // offsets. Its first voxel's -x face is span.x_carry[c], the +x face of voxel begin - 1 as the
 // walk left it (plusXFaces), so a span's voxels and faces are the bytes of the whole row's walk;
-// only the span's entries of out, yface and zface are read or written. Empty-space skipping
-// (fusion_common.h: forEachFaceRow) computes the spans that pass the person.
+// only the span's entries of out, yface and zface are written (the vector kernels may read up
+// to a vector past the span's end and discard it: hence the buffers' 16 entries of padding).
+// Empty-space skipping (fusion_common.h: forEachFaceRow) computes the spans that pass the person.
 struct RowSpan {
   int begin = 0, end = 0;              // multiples of ProjectionTable::kChunk, end <= nxp
   const int32_t* x_carry = nullptr;    // per camera, -1: not observed; nullptr: none (begin 0)
 };
-inline RowSpan wholeRow(const PsfsRowParams& p) { return RowSpan{0, p.nxp, nullptr}; }
 using PsfsFaceRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres,
                                const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
                                uint8_t* out, const RowSpan& span);

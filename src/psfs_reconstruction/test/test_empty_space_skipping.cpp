@@ -16,6 +16,7 @@
 #include "fusion_test_utils.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/reconstructor.h"
+#include "psfs_reconstruction/simd_dispatch.h"
 #include "tabletop_sim/simulated_rig.h"
 #include "test_data_path.h"
 
@@ -132,35 +133,92 @@ TEST(EmptySpaceSkipping, SkipsOnlyVoxelsBelowTheLevelAndLeavesTheRestByteForByte
       }
 }
 
-// Every face kernel (the reference, Highway's, the hand-written ones) computes spans of a row
-// and re-samples the carried faces the same way after a skipped chunk; a grid whose sides are not multiples of the cell or
-// the kernels' vectors; the layers under a floor (0 whatever is skipped).
+// The shapes of the spans the fusion computes (forEachFaceRow): rows partly skipped, spans that
+// start inside a row (x carried from plusXFaces), spans of an odd number of chunks that end
+// inside a row (the 16-lane kernels' half step away from the padding).
+struct SpanShapes {
+  size_t partial_rows = 0, inner_starts = 0, odd_inner_ends = 0;
+};
+SpanShapes spanShapes(const ProjectionTable& table, const PsfsOptions& skipping, const ViewEvidence& ev) {
+  detail::EmptySkipCache cache;
+  detail::tileMaxImages(ev, 1, &cache.tiles);
+  std::vector<uint8_t> flags;
+  detail::skippedChunks(skipping, table, &cache, &flags);
+  const size_t chunks = size_t(table.chunksPerRow());
+  SpanShapes n;
+  for (size_t r = 0; r < table.grid().numRows(); ++r) {
+    const uint8_t* f = &flags[r * chunks];
+    const size_t flagged = size_t(std::count(f, f + chunks, uint8_t(1)));
+    if (flagged == 0 || flagged == chunks) continue;
+    ++n.partial_rows;
+    for (size_t a = 0; a < chunks;) {
+      if (f[a]) { ++a; continue; }
+      size_t b = a + 1;
+      while (b < chunks && !f[b]) ++b;
+      n.inner_starts += a > 0;
+      n.odd_inner_ends += b < chunks && (b - a) % 2 == 1;
+      a = b;
+    }
+  }
+  return n;
+}
+
+// Every face kernel (the reference, every Highway target this CPU runs, the hand-written AVX-512
+// and AVX2 ones) computes spans of a row and re-samples the carried faces the same way after a
+// skipped chunk (the AVX2 switch also takes plusFacesOfRow's portable branch); a grid whose
+// sides are not multiples of the cell or the kernels' vectors; the layers under a floor (0
+// whatever is skipped); stored and on-the-fly tables.
 TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
   const SimViews& s = simViews();
   VoxelGrid odd = referenceGrid(Resolution::k16mm);
   odd.dims = Eigen::Vector3i(61, 59, 45);
   ProjectionTableOptions to;
   to.multi_projection = true;
+  ProjectionTableOptions fly = to;
+  fly.storage = TableStorage::kOnTheFly;
+  // -1: the reference, -2: the hand-written x86 kernels, > 0: a Highway target.
+  std::vector<int64_t> kernels = {-1, -2};
+  for (int64_t t : detail::hwyRowTargets()) kernels.push_back(t);
   for (const VoxelGrid& g : {referenceGrid(Resolution::k16mm), odd}) {
-    const ProjectionTable table(g, s.cameras, to);
+    const ProjectionTable table(g, s.cameras, to), fly_table(g, s.cameras, fly);
     ViewEvidence ev;
     ev.set(s.frames[0][1], true);
-    // -1: the reference, -2: the hand-written x86 kernels, then Highway's best non-AVX-512 target.
-    for (int64_t kernel : {int64_t(-1), int64_t(-2), detail::hwyRowTarget(true, false)})
-      for (double floor_z : {-std::numeric_limits<double>::infinity(), 0.1}) {
-        detail::forceFaceRowKernelForTest(kernel);
-        PsfsOptions o;
-        o.multi_projection = true;
-        o.floor_z = floor_z;
-        o.threads = 2;
-        PsfsOptions os = o;
-        os.skip_empty_below = 0.5;
-        ProbabilityVolume a, b;
-        PsfsFusion(o).fuse(table, ev, &a);
-        PsfsFusion(os).fuse(table, ev, &b);
-        expectSkippingRule(table, ev, os, a, b,
-                           g.describe() + " kernel " + std::to_string(kernel) + " floor " + std::to_string(floor_z));
+    PsfsOptions os;
+    os.multi_projection = true;
+    os.skip_empty_below = 0.5;
+    // The rule below is only worth as much as the shapes it meets.
+    const SpanShapes n = spanShapes(table, os, ev);
+    std::printf("[ figures  ] %s: %zu rows partly skipped, %zu spans start inside a row, %zu odd spans end inside one\n",
+                g.describe().c_str(), n.partial_rows, n.inner_starts, n.odd_inner_ends);
+    EXPECT_GT(n.partial_rows, 100u) << g.describe();
+    EXPECT_GT(n.inner_starts, 100u) << g.describe();
+    EXPECT_GT(n.odd_inner_ends, 10u) << g.describe();
+    for (int64_t kernel : kernels)
+      for (bool avx2 : {false, true}) {
+        if (avx2 && kernel != -2) continue;  // the switch picks among the hand-written kernels
+        for (double floor_z : {-std::numeric_limits<double>::infinity(), 0.1}) {
+          detail::forceFaceRowKernelForTest(kernel);
+          forceAvx2Kernels(avx2);
+          PsfsOptions o;
+          o.multi_projection = true;
+          o.floor_z = floor_z;
+          o.threads = 2;
+          PsfsOptions osf = os;
+          osf.floor_z = floor_z;
+          osf.threads = 2;
+          ProbabilityVolume a, b, c;
+          PsfsFusion(o).fuse(table, ev, &a);
+          PsfsFusion(osf).fuse(table, ev, &b);
+          const std::string what = g.describe() + " kernel " + std::to_string(kernel) + (avx2 ? " (AVX2)" : "") +
+                                   " floor " + std::to_string(floor_z);
+          expectSkippingRule(table, ev, osf, a, b, what);
+          if (kernel == -1 || avx2) {
+            PsfsFusion(osf).fuse(fly_table, ev, &c);
+            EXPECT_EQ(b.data, c.data) << what << " (on-the-fly table)";
+          }
+        }
       }
+    forceAvx2Kernels(false);
     detail::forceFaceRowKernelForTest(0);
   }
 }

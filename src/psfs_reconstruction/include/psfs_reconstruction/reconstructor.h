@@ -122,8 +122,8 @@ struct ReconstructorParams {
 
   // Empty space skipped below 0.5 (PsfsOptions::skip_empty_below): the hull and every voxel
   // at or above 0.5 as without it, at about 0.4 of the multi-projection's cost on the default
-  // rig; the trackers' figures over 96 generated scenarios unchanged in their medians
-  // (docs/benchmarks.md, "pSfS: empty-space skipping in the multi-projection test" and
+  // rig; over 96 generated scenarios the volumes, heads and IoUs unchanged, the hands' medians
+  // within 0.6 mm (docs/benchmarks.md, "pSfS: empty-space skipping in the multi-projection test" and
   // "... by chunks of 8 voxels").
   static PsfsOptions defaultBody() {
     PsfsOptions o;
