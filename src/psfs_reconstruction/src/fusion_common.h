@@ -69,8 +69,8 @@ void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& 
 // (psfs_kernels.h). The work is split into slabs of consecutive z layers, each walked in
 // memory order (z, then y) by one thread with its own face buffers, so the stored table
 // streams through the caches as one sequence per slab; a slab that does not start at z = 0
-// first samples the +z faces of the layer below it (plusFacesOfRow), so the result does not
-// depend on the split. Slabs are handed out dynamically, about 3 per thread: a thread on a
+// samples the +z faces of the layer below it (plusFacesOfRow) row by row as its first layer
+// needs them, so the result does not depend on the split. Slabs are handed out dynamically, about 3 per thread: a thread on a
 // busier core takes fewer (the extra layer per slab costs a third of a layer's lookups, plus
 // its projections for a table projected on the fly). Slabs are at least 2 layers deep, so a
 // grid of nz layers uses at most nz / 2 threads.
@@ -81,8 +81,8 @@ void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& 
 // from the voxel before it (plusXFaces), and skip_fn(row) is called once for a row with any
 // flagged chunk (after its spans) to write those. The faces a span needs from a neighbour
 // that did not compute them (the row before it in y, the same row in the layer below) are
-// sampled with plusFacesOfRow first, so a computed voxel is the same bytes whatever is skipped.
-// With skip, a slab's first layer also takes the faces from below only where it computes.
+// sampled with plusFacesOfRow first, so a computed voxel is the same bytes whatever is skipped
+// (a slab's first layer is the same case: nothing below it was computed by this thread).
 template <class Fn, class SkipFn>
 void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>& views,
                     int threads, const Fn& fn, const uint8_t* skip, const SkipFn& skip_fn) {
@@ -121,17 +121,8 @@ void forEachFaceRow(const ProjectionTable& table, const std::vector<KernelView>&
 #pragma omp for schedule(dynamic, 1)
     for (int sl = 0; sl < slabs; ++sl) {
       const int z0 = sl * depth, z1 = std::min(nz, z0 + depth);
-      if (z0 == 0) {
-        std::fill(zface.begin(), zface.end(), kNoFace);
-        std::fill(zface_ok.begin(), zface_ok.end(), uint8_t(1));
-      } else if (skip) {
-        std::fill(zface_ok.begin(), zface_ok.end(), uint8_t(0));
-      } else {
-        for (int y = 0; y < ny; ++y)
-          plusFacesOfRow(views.data(), C, nxp, table.rowCentres(size_t(y) + size_t(ny) * (z0 - 1), cs.data()),
-                         table.rowOffsets(size_t(y) + size_t(ny) * (z0 - 1), os.data()), 2,
-                         &zface[size_t(y) * row_faces]);
-      }
+      if (z0 == 0) std::fill(zface.begin(), zface.end(), kNoFace);  // no voxel below: sample from above
+      std::fill(zface_ok.begin(), zface_ok.end(), uint8_t(z0 == 0));
       for (int z = z0; z < z1; ++z) {
         std::fill(yface.begin(), yface.end(), kNoFace);
         std::fill(yface_ok.begin(), yface_ok.end(), uint8_t(1));

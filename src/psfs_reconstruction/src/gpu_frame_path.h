@@ -58,8 +58,8 @@ class GpuFramePath {
   GpuPsfsFusion body_, skin_, hand_;
   bool body_bilinear_, skin_bilinear_;
   std::vector<cv::Mat> off_masks_;   // all-zero masks of switched-off views, kept per camera
-  // Empty-space skipping (PsfsOptions::skip_empty_below): the device fuses every row; the rows
-  // the CPU path skips are set to its fill from the host likelihoods' bounds.
+  // Empty-space skipping (PsfsOptions::skip_empty_below): the device fuses every voxel; the
+  // chunks the CPU path skips are set to its fill from the host likelihoods' bounds.
   detail::EmptySkipCache body_skip_, skin_skip_;
   bool device_current_ = false;      // the device holds the host's models (or newer ones)
   bool device_newer_ = false;        // the device updated them since they were uploaded

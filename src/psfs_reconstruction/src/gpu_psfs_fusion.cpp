@@ -149,7 +149,7 @@ void GpuPsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evide
   detail::checkFootprint(table, evidence, options_.footprint, kWho);
   const std::vector<detail::HostEvidenceView> views = hostViews(evidence, options_.multi_projection);
   run(table, views.data(), nullptr, out);
-  if (detail::skipsEmptySpace(options_)) {  // the device fused every row: fill PsfsFusion's skipped ones
+  if (detail::skipsEmptySpace(options_)) {  // the device fused every voxel: fill PsfsFusion's skipped chunks
     detail::tileMaxImages(evidence, options_.threads, &impl_->skip.tiles);
     detail::fillSkipped(options_, table, &impl_->skip, out);
   }

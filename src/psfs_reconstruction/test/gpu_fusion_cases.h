@@ -1,8 +1,8 @@
 // Shared by test_gpu_fusion's sources and test_empty_space_skipping: frames of the simulated
-// rig turned into likelihood images as test_fusion_sim does (renderer masks, classifier-like noise, CV_8UC2: 0 body,
-// 1 skin), and the fusion cases the GPU path must reproduce byte for byte: the 64x64x48
-// tracking volume with and without the multi-projection test, a 83^3 hand sub-volume projected
-// on the fly, a grid partly outside some views (one camera zoomed in, a grid larger than the
+// rig turned into likelihood images as test_fusion_sim does (renderer masks, classifier-like
+// noise, CV_8UC2: 0 body, 1 skin), and the fusion cases the GPU path must reproduce byte for
+// byte: the 64x64x48 tracking volume with and without the multi-projection test, a 83^3 hand
+// sub-volume projected on the fly, a grid partly outside some views (one camera zoomed in, a grid larger than the
 // user space), switched-off pixels, footprint levels, a floor (PsfsOptions::floor_z), and
 // occluded_views 0..2.
 #pragma once

@@ -25,6 +25,16 @@ namespace {
 
 namespace sim = tabletop_sim;
 
+// The chunks a skipping fusion with options o leaves out on this evidence, with the bound's
+// cache (its fill) as the fusion derives them.
+std::vector<uint8_t> skippedFlags(const ProjectionTable& table, const ViewEvidence& ev, const PsfsOptions& o,
+                                  detail::EmptySkipCache* cache) {
+  detail::tileMaxImages(ev, 1, &cache->tiles);
+  std::vector<uint8_t> flags;
+  detail::skippedChunks(o, table, cache, &flags);
+  return flags;
+}
+
 // The rule, exactly: the chunks (8 voxels of a row) the bound skips hold its fill (0 where a
 // voxel has fewer than min_views cameras), and each of their voxels was at most the level's
 // byte without skipping (the bound's soundness); every other voxel is the full fusion's byte.
@@ -34,9 +44,7 @@ size_t expectSkippingRule(const ProjectionTable& table, const ViewEvidence& ev, 
   EXPECT_EQ(full.data.size(), skipped.data.size()) << what;
   if (full.data.size() != skipped.data.size()) return 0;
   detail::EmptySkipCache cache;
-  detail::tileMaxImages(ev, 1, &cache.tiles);
-  std::vector<uint8_t> flags;
-  detail::skippedChunks(skipping, table, &cache, &flags);
+  const std::vector<uint8_t> flags = skippedFlags(table, ev, skipping, &cache);
   const size_t nx = size_t(table.grid().dims.x()), chunks = size_t(table.chunksPerRow());
   // A posterior below the level rounds to at most this byte (the exp table rounds to nearest).
   const int level_byte = int(skipping.skip_empty_below * 255.0 + 0.5);
@@ -141,9 +149,7 @@ struct SpanShapes {
 };
 SpanShapes spanShapes(const ProjectionTable& table, const PsfsOptions& skipping, const ViewEvidence& ev) {
   detail::EmptySkipCache cache;
-  detail::tileMaxImages(ev, 1, &cache.tiles);
-  std::vector<uint8_t> flags;
-  detail::skippedChunks(skipping, table, &cache, &flags);
+  const std::vector<uint8_t> flags = skippedFlags(table, ev, skipping, &cache);
   const size_t chunks = size_t(table.chunksPerRow());
   SpanShapes n;
   for (size_t r = 0; r < table.grid().numRows(); ++r) {

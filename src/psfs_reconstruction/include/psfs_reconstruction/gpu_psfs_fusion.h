@@ -62,10 +62,10 @@ class GpuPsfsFusion {
   void fuse(const ProjectionTable& table, const ViewEvidence& evidence, ProbabilityVolume* out);
   // The same with the evidence already in device memory (gpu_evidence.h), one view per camera;
   // its writer must have finished (its stream synchronised). With PsfsOptions::skip_empty_below
-  // this fuses every row (the device has no host copy of the likelihoods to bound them): the
-  // caller sets the rows PsfsFusion skips to its fill from its host views (GpuFramePath does),
-  // so the bytes agree. Multi-projection needs the pair
-  // images, footprint tables evidence with their levels (not checkable here: the caller's).
+  // this fuses every voxel (the device has no host copy of the likelihoods to bound them): the
+  // caller sets the chunks PsfsFusion skips to its fill from its host views (GpuFramePath
+  // does), so the bytes agree. Multi-projection needs the pair images, footprint tables
+  // evidence with their levels (not checkable here: the caller's).
   void fuse(const ProjectionTable& table, const GpuEvidence& evidence, ProbabilityVolume* out);
 
   // Device and pinned host allocations made so far (buffers grow only, so steady frames of
