@@ -152,6 +152,9 @@ else
     fi
   done
   kill $rs_pid 2>/dev/null
+  # $rs_pid is the background subshell; the server (env -> bash -> rosrun, each exec'd) is its
+  # child and outlives it: stop it by its unique command line.
+  pkill -f "room_server --bind 127.0.0.1 --port $WPORT " 2>/dev/null
   wait $rs_pid 2>/dev/null
   case_result room_server_serves_client "${fail:+FAIL: $fail}"
 fi
