@@ -21,7 +21,6 @@ namespace {
 constexpr int kMarginPx = 3;
 // Fixed-point units added to each camera's bound: the log polynomial's rounding (< 1 unit).
 constexpr int32_t kTermMargin = 2;
-constexpr int kMaxBoundCameras = 64;
 
 // The bound's log term of a byte: the log term of the largest median pair that 6 samples of
 // bytes <= b can give (2 * 256 * b), plus the margin, at most 0.
@@ -323,6 +322,11 @@ bool EmptySpaceBound::cellBelow(int cell, const std::vector<TileMaxImage>& tiles
     }
   }
   if (monotone && all_read) return false;
+  return boundBelow(all, n_all, some, n_some, p, k, limit_per_view);
+}
+
+bool boundBelow(const int32_t* all, int n_all, int32_t* some, int n_some, const PsfsRowParams& p, int k,
+                int32_t limit_per_view) {
   // A voxel's views are all of the first kind and some of the second; its mean is largest with
   // the second kind's largest bounds, so j of those, for every j.
   std::sort(some, some + n_some, std::greater<int32_t>());
@@ -339,6 +343,14 @@ bool EmptySpaceBound::cellBelow(int cell, const std::vector<TileMaxImage>& tiles
     if (sum >= int64_t(kept) * limit_per_view) return false;
   }
   return true;
+}
+
+int32_t boundLimitPerView(const PsfsRowParams& p, double max_probability) {
+  if (!(max_probability > 0.0) || !(max_probability < 1.0))
+    throw std::invalid_argument("psfs: empty-space skipping level must be in (0, 1)");
+  // mean + offset < ln(max_probability)  <=  sum < kept * floor(1024 (ln max - offset)).
+  const double limit = std::floor((std::log(max_probability) - double(p.offset)) * kVoxLogScale);
+  return int32_t(std::max(limit, -1e9));
 }
 
 void EmptySpaceBound::fillChunks(size_t row, const uint8_t* flags, uint8_t fill, int min_views, uint64_t absent,
@@ -363,12 +375,8 @@ size_t EmptySpaceBound::skippableChunks(const std::vector<TileMaxImage>& tiles, 
   if (int(tiles.size()) != cameras_)
     throw std::invalid_argument("psfs::EmptySpaceBound: tile images for " + std::to_string(tiles.size()) +
                                 " cameras, table has " + std::to_string(cameras_));
-  if (!(max_probability > 0.0) || !(max_probability < 1.0))
-    throw std::invalid_argument("psfs::EmptySpaceBound: max_probability must be in (0, 1)");
+  const int32_t limit_per_view = boundLimitPerView(p, max_probability);
   flags->assign(size_t(ny_) * nz_ * chunks_, 0);
-  // mean + offset < ln(max_probability)  <=  sum < kept * floor(1024 (ln max - offset)).
-  const double limit = std::floor((std::log(max_probability) - double(p.offset)) * kVoxLogScale);
-  const int32_t limit_per_view = int32_t(std::max(limit, -1e9));
   constexpr int kCellsPerChunk = kChunk / kCell;
   std::vector<uint8_t> chunk_below(static_cast<size_t>(chunks_), 0);
   size_t skipped = 0;

@@ -40,6 +40,7 @@
 #include "psfs_reconstruction/projection_table.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/view_evidence.h"
+#include "centre_space_bound.h"
 #include "voxel_arithmetic.h"
 
 namespace psfs {
@@ -122,9 +123,27 @@ class EmptySpaceBound {
   std::vector<uint8_t> chunk_views_;     // per row and chunk: the fewest views_seen_ of its voxels
 };
 
-// Whether a fusion with these options skips empty space (PsfsOptions::skip_empty_below: the
-// multi-projection test's only).
+// Cameras a bound handles (a bit each in the per-voxel masks).
+constexpr int kMaxBoundCameras = 64;
+
+// Whether no voxel can fuse to a mean log term (offset included, 1/1024 units, per kept view) at
+// or above limit_per_view, given per camera an upper bound of its term: `all` for the cameras
+// that give every voxel evidence, `some` for those that give it to some voxels (sorted here);
+// with p.min_views and occlusion tolerance k (of the n - k largest: dropping low views only
+// raises a mean), over every count of the `some` cameras a voxel may have.
+bool boundBelow(const int32_t* all, int n_all, int32_t* some, int n_some, const PsfsRowParams& p, int k,
+                int32_t limit_per_view);
+// The per-view limit of a level: a sum of kept views' terms below kept times this fuses below
+// max_probability (in (0, 1); throws std::invalid_argument otherwise).
+int32_t boundLimitPerView(const PsfsRowParams& p, double max_probability);
+
+// Whether a fusion with these options skips empty space with this bound (PsfsOptions::
+// skip_empty_below with the multi-projection test).
 inline bool skipsEmptySpace(const PsfsOptions& o) { return o.multi_projection && o.skip_empty_below > 0.0; }
+// ... or with the single projection's (centre_space_bound.h; not with footprint levels).
+inline bool skipsCentreSpace(const PsfsOptions& o) {
+  return !o.multi_projection && !o.footprint && o.skip_empty_below > 0.0;
+}
 
 // The tiles of every view of a frame's evidence (inactive where its terms say "no evidence").
 void tileMaxImages(const ViewEvidence& evidence, int threads, std::vector<TileMaxImage>* out);
@@ -135,6 +154,7 @@ void tileMaxImages(const std::vector<ViewImage>& views, int threads, std::vector
 struct EmptySkipCache {
   std::mutex mutex;
   EmptySpaceBound bound;
+  CentreSpaceBound centre;  // the single projection's
   std::vector<TileMaxImage> tiles;
   double last_fraction = 0.0;
   uint8_t fill = 0;     // what skipped voxels are set to (skippedChunks)

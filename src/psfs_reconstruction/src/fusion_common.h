@@ -65,6 +65,35 @@ void forEachRow(const ProjectionTable& table, int threads, int chunk, const Fn& 
   }
 }
 
+// The same with parts of rows skipped (flags[row * chunksPerRow() + chunk] = 1: not computed):
+// fn(row, centres, span) once per run of unflagged chunks, the centres projected for that span
+// only when the table projects on the fly; skip_fn(row, begin, end) for each run of flagged
+// chunks (voxels [begin, min(end, nx)) of the row).
+template <class Fn, class SkipFn>
+void forEachRowSpan(const ProjectionTable& table, int threads, int chunk, const uint8_t* flags, const Fn& fn,
+                    const SkipFn& skip_fn, size_t first_row = 0) {
+  const long long rows = static_cast<long long>(table.grid().numRows());
+  const int chunks = table.chunksPerRow();
+  constexpr int kChunk = ProjectionTable::kChunk;
+#pragma omp parallel num_threads(resolveThreads(threads))
+  {
+    std::vector<uint32_t> cs(table.precomputed() ? 0 : table.centreScratchSize());
+#pragma omp for schedule(dynamic, chunk)
+    for (long long r = static_cast<long long>(first_row); r < rows; ++r) {
+      const uint8_t* f = flags + size_t(r) * chunks;
+      for (int a = 0; a < chunks;) {
+        int b = a + 1;
+        while (b < chunks && f[b] == f[a]) ++b;
+        if (f[a])
+          skip_fn(size_t(r), a * kChunk, b * kChunk);
+        else
+          fn(size_t(r), table.rowCentres(size_t(r), cs.data(), a * kChunk, b * kChunk), RowSpan{a * kChunk, b * kChunk});
+        a = b;
+      }
+    }
+  }
+}
+
 // Walks the rows of a multi-projection grid in the order the shared face samples need
 // (psfs_kernels.h). The work is split into slabs of consecutive z layers, each walked in
 // memory order (z, then y) by one thread with its own face buffers, so the stored table

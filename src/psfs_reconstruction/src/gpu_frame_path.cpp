@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "volume_fusion.h"
+
 namespace psfs {
 
 GpuFramePath::GpuFramePath(const GaussianMixture2D& skin, const ReconstructorParams& params)
@@ -62,6 +64,9 @@ void GpuFramePath::buildEvidence(const std::vector<bool>& camera_active,
     active[i] = off;
   }
   pixels_.buildEvidence(active, body_bilinear_, skin_bilinear_, with_skin);
+  // The hand sub-volumes' skipping reads the skin likelihoods on the host (centre_space_bound.h).
+  skin_views_.assign(likelihoods.size(), ViewImage{});
+  for (size_t i = 0; i < likelihoods.size() && with_skin; ++i) skin_views_[i] = ViewImage{likelihoods[i], 1, active[i]};
   // The bounds of the CPU path's skipping, from the same likelihoods and masks.
   for (int kind = 0; kind < (with_skin ? 2 : 1); ++kind) {
     const PsfsOptions& o = (kind ? skin_ : body_).options();
@@ -82,8 +87,16 @@ void GpuFramePath::fuseSkin(const ProjectionTable& table, ProbabilityVolume* out
   if (detail::skipsEmptySpace(skin_.options()))
     detail::fillSkipped(skin_.options(), table, &skin_skip_, out);
 }
-void GpuFramePath::fuseHand(const ProjectionTable& table, ProbabilityVolume* out) {
+double GpuFramePath::fuseHand(const ProjectionTable& table, ProbabilityVolume* out) {
   hand_.fuse(table, pixels_.skinEvidence(), out);
+  const PsfsOptions& o = hand_.options();
+  if (!detail::skipsCentreSpace(o)) return 0.0;
+  // The device fused every voxel: zero what PsfsFusion skips.
+  std::vector<uint8_t> flags;
+  const double skipped = hand_skip_.centre.skippableChunks(table, skin_views_, detail::psfsRowParams(o, table),
+                                                           o.occluded_views, o.skip_empty_below, o.threads, &flags);
+  detail::zeroChunks(table, flags, out);
+  return skipped;
 }
 
 void GpuFramePath::updateBackground(const std::vector<cv::Mat>& masks,

@@ -50,7 +50,8 @@ class GpuFramePath {
                      bool with_skin);
   void fuseBody(const ProjectionTable& table, ProbabilityVolume* out);
   void fuseSkin(const ProjectionTable& table, ProbabilityVolume* out);
-  void fuseHand(const ProjectionTable& table, ProbabilityVolume* out);
+  // Returns the share of the voxels the CPU path skips (set to 0 here, as there).
+  double fuseHand(const ProjectionTable& table, ProbabilityVolume* out);
   void updateBackground(const std::vector<cv::Mat>& masks, const std::vector<bool>& camera_active);
 
  private:
@@ -60,7 +61,8 @@ class GpuFramePath {
   std::vector<cv::Mat> off_masks_;   // all-zero masks of switched-off views, kept per camera
   // Empty-space skipping (PsfsOptions::skip_empty_below): the device fuses every voxel; the
   // chunks the CPU path skips are set to its fill from the host likelihoods' bounds.
-  detail::EmptySkipCache body_skip_, skin_skip_;
+  detail::EmptySkipCache body_skip_, skin_skip_, hand_skip_;
+  std::vector<ViewImage> skin_views_;  // this frame's skin likelihoods and masks, on the host
   bool device_current_ = false;      // the device holds the host's models (or newer ones)
   bool device_newer_ = false;        // the device updated them since they were uploaded
 };

@@ -153,6 +153,12 @@ void GpuPsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evide
     detail::tileMaxImages(evidence, options_.threads, &impl_->skip.tiles);
     detail::fillSkipped(options_, table, &impl_->skip, out);
   }
+  if (detail::skipsCentreSpace(options_)) {  // ... or zero the single projection's
+    std::vector<uint8_t> flags;
+    impl_->skip.centre.skippableChunks(table, evidence, detail::psfsRowParams(options_, table), options_.occluded_views,
+                                       options_.skip_empty_below, options_.threads, &flags);
+    detail::zeroChunks(table, flags, out);
+  }
 }
 
 void GpuPsfsFusion::fuse(const ProjectionTable& table, const GpuEvidence& evidence, ProbabilityVolume* out) {

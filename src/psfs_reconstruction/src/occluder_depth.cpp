@@ -43,16 +43,30 @@ std::vector<cv::Mat> occluderDepths(const ProbabilityVolume& volume, uint8_t thr
     const auto& cam = cameras[c];
     cv::Mat& d = depth[c];
     float* px = d.ptr<float>();
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector3i& o : occupied) {
-      const int idx = voxelCentrePixel(g, cam, c, use_table ? table : nullptr, o.x(), o.y(), o.z());
-      if (idx < 0) continue;
-      const double dist = (g.centre(o.x(), o.y(), o.z()) - cam.center()).norm();
-      px[idx] = std::min(px[idx], static_cast<float>(dist));
+    const int np = cam.width * cam.height;
+    // Distances in float from the camera's centre: millimetres matter here, not nanometres.
+    const Eigen::Vector3d o = g.origin - cam.center();
+    const float ox = float(o.x()), oy = float(o.y()), oz = float(o.z()), s = float(g.voxel_size);
+    float nearest = std::numeric_limits<float>::infinity();
+    for (const Eigen::Vector3i& v : occupied) {
+      int idx;
+      if (use_table) {  // the stored table's entry (footprint level removed), as voxelCentrePixel reads it
+        const size_t row = size_t(v.y()) + size_t(g.dims.y()) * size_t(v.z());
+        const uint32_t packed = table->rowCentres(row, nullptr)[size_t(c) * table->paddedRowLength() + v.x()];
+        idx = PackedUV::pixelIndex(table->footprintLevels() > 0 ? table->withoutLevel(c, packed) : packed, cam.width);
+        if (idx >= np) continue;  // not observed
+      } else {
+        idx = voxelCentrePixel(g, cam, c, nullptr, v.x(), v.y(), v.z());
+        if (idx < 0) continue;
+      }
+      const float dx = ox + s * (float(v.x()) + 0.5f), dy = oy + s * (float(v.y()) + 0.5f),
+                  dz = oz + s * (float(v.z()) + 0.5f);
+      const float dist = std::sqrt(dx * dx + dy * dy + dz * dz);
+      px[idx] = std::min(px[idx], dist);
       nearest = std::min(nearest, dist);
     }
     if (!std::isfinite(nearest)) continue;
-    const int r = static_cast<int>(std::ceil(half_diag * std::max(cam.fx, cam.fy) / std::max(0.05, nearest)));
+    const int r = static_cast<int>(std::ceil(half_diag * std::max(cam.fx, cam.fy) / std::max(0.05, double(nearest))));
     if (r > 0) cv::erode(d, d, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * r + 1, 2 * r + 1)),
                          cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(kNone));
   }

@@ -26,21 +26,22 @@ namespace {
 // The row projection's fast paths: projectVoxel (voxel_projection.h) 8 or 16 voxels at a time,
 // the same float operations per lane (FMAs included), so every path writes the same table; the
 // portable path is projectVoxel itself. Voxels x in [nx, nxp) are padding: not observed.
-inline void projectRowBody(const ProjectionCamera& cam, const detail::ProjectionRow& p, int nx, int nxp,
-                           uint32_t* out) {
-  for (int x = 0; x < nx; ++x) out[x] = detail::projectVoxel(cam, p, x);
-  for (int x = nx; x < nxp; ++x) out[x] = cam.not_observed;
+// Voxels [begin, end) of a row (whole chunks, end <= nxp) into out[begin, end).
+inline void projectRowBody(const ProjectionCamera& cam, const detail::ProjectionRow& p, int nx, int begin,
+                           int end, uint32_t* out) {
+  for (int x = begin; x < std::min(nx, end); ++x) out[x] = detail::projectVoxel(cam, p, x);
+  for (int x = std::max(nx, begin); x < end; ++x) out[x] = cam.not_observed;
 }
 
 #if PSFS_HAVE_X86_DISPATCH
 __attribute__((target("avx2,fma"))) void projectRowAvx2(const ProjectionCamera& cam, const detail::ProjectionRow& p,
-                                                        int nx, int nxp, uint32_t* out) {
+                                                        int nx, int begin, int end, uint32_t* out) {
   const __m256 a0 = _mm256_set1_ps(p.a[0]), a1 = _mm256_set1_ps(p.a[1]), a2 = _mm256_set1_ps(p.a[2]);
   const __m256 b0 = _mm256_set1_ps(p.b[0]), b1 = _mm256_set1_ps(p.b[1]), b2 = _mm256_set1_ps(p.b[2]);
   const __m256 zmin = _mm256_set1_ps(detail::kMinDepth), fone = _mm256_set1_ps(1.0f);
   const __m256i sentinel = _mm256_set1_epi32(static_cast<int>(cam.not_observed));
   const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  for (int x0 = 0; x0 < nxp; x0 += 8) {
+  for (int x0 = begin; x0 < end; x0 += 8) {
     const __m256i xi = _mm256_add_epi32(_mm256_set1_epi32(x0), lanes);
     const __m256 xs = _mm256_cvtepi32_ps(xi);
     const __m256 X = _mm256_fmadd_ps(xs, b0, a0), Y = _mm256_fmadd_ps(xs, b1, a1);
@@ -90,14 +91,14 @@ __attribute__((target("avx2,fma"))) void projectRowAvx2(const ProjectionCamera& 
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 __attribute__((target("avx512f,avx2,fma"))) void projectRowAvx512(const ProjectionCamera& cam,
                                                                   const detail::ProjectionRow& p, int nx,
-                                                                  int nxp, uint32_t* out) {
+                                                                  int begin, int end, uint32_t* out) {
   const __m512 a0 = _mm512_set1_ps(p.a[0]), a1 = _mm512_set1_ps(p.a[1]), a2 = _mm512_set1_ps(p.a[2]);
   const __m512 b0 = _mm512_set1_ps(p.b[0]), b1 = _mm512_set1_ps(p.b[1]), b2 = _mm512_set1_ps(p.b[2]);
   const __m512 zmin = _mm512_set1_ps(detail::kMinDepth), fone = _mm512_set1_ps(1.0f);
   const __m512i sentinel = _mm512_set1_epi32(static_cast<int>(cam.not_observed));
   const __m512i lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  for (int x0 = 0; x0 < nxp; x0 += 16) {
-    const __mmask16 store = x0 + 16 <= nxp ? __mmask16(0xFFFF) : __mmask16(0x00FF);  // nxp: multiple of 8
+  for (int x0 = begin; x0 < end; x0 += 16) {
+    const __mmask16 store = x0 + 16 <= end ? __mmask16(0xFFFF) : __mmask16(0x00FF);  // end: multiple of 8
     const __m512i xi = _mm512_add_epi32(_mm512_set1_epi32(x0), lanes);
     const __m512 xs = _mm512_cvtepi32_ps(xi);
     const __m512 X = _mm512_fmadd_ps(xs, b0, a0), Y = _mm512_fmadd_ps(xs, b1, a1);
@@ -239,17 +240,21 @@ ProjectionTable::ProjectionTable(const VoxelGrid& grid,
 
 bool ProjectionTable::update(const VoxelGrid& grid,
                              const std::vector<tabletop_capture::CameraModel>& cameras) {
-  bool same = grid == grid_ && cameras.size() == cameras_.size() && !cameras_.empty();
-  for (size_t i = 0; same && i < cameras.size(); ++i) same = sameCamera(cameras[i], cameras_[i].model);
-  if (same) return false;
+  bool same_cameras = cameras.size() == cameras_.size() && !cameras_.empty();
+  for (size_t i = 0; same_cameras && i < cameras.size(); ++i) same_cameras = sameCamera(cameras[i], cameras_[i].model);
+  if (same_cameras && grid == grid_) return false;
   grid.validate();
   if (cameras.empty()) throw std::invalid_argument("psfs::ProjectionTable: no cameras");
-  std::vector<Camera> prepared;
-  for (size_t i = 0; i < cameras.size(); ++i)
-    prepared.push_back(prepareCamera(cameras[i], static_cast<int>(i)));
-  checkFootprintRows(prepared);
+  // A grid that moves (a hand's cube, every frame) keeps the cameras' constants: preparing one
+  // searches the lens model's valid range (undistorting the image border).
+  if (!same_cameras) {
+    std::vector<Camera> prepared;
+    for (size_t i = 0; i < cameras.size(); ++i)
+      prepared.push_back(prepareCamera(cameras[i], static_cast<int>(i)));
+    checkFootprintRows(prepared);
+    cameras_ = std::move(prepared);
+  }
   grid_ = grid;
-  cameras_ = std::move(prepared);
   build();
   return true;
 }
@@ -279,13 +284,20 @@ void ProjectionTable::build() {
   const size_t bytes = precomputedBytes(grid_, numCameras(), options_.multi_projection);
   precomputed_ = options_.storage == TableStorage::kPrecomputed ||
                  (options_.storage == TableStorage::kAuto && bytes <= options_.auto_max_bytes);
-  centres_.clear();
-  offsets_.clear();
-  centres_.shrink_to_fit();
-  offsets_.shrink_to_fit();
-  if (!precomputed_) return;
   const size_t C = cameras_.size(), rows = grid_.numRows();
   const size_t cs = centreScratchSize(), os = offsetScratchSize();
+  // A rebuild of the same size (a grid that moves) keeps the memory: fresh pages cost a fault
+  // each, more than projecting a small table.
+  const size_t n_centres = precomputed_ ? rows * cs : 0, n_offsets = precomputed_ && options_.multi_projection ? rows * os : 0;
+  if (centres_.size() != n_centres) {
+    centres_.clear();
+    centres_.shrink_to_fit();
+  }
+  if (offsets_.size() != n_offsets) {
+    offsets_.clear();
+    offsets_.shrink_to_fit();
+  }
+  if (!precomputed_) return;
   centres_.resize(rows * cs);
   if (options_.multi_projection) offsets_.resize(rows * os);
   const int ny = grid_.dims.y();
@@ -295,7 +307,7 @@ void ProjectionTable::build() {
   for (long long r = 0; r < nrows; ++r) {
     const int y = static_cast<int>(r % ny), z = static_cast<int>(r / ny);
     for (size_t c = 0; c < C; ++c) {
-      projectRow(cameras_[c], y, z, &centres_[size_t(r) * cs + c * nxp_]);
+      projectRow(cameras_[c], y, z, &centres_[size_t(r) * cs + c * nxp_], 0, nxp_);
       if (options_.multi_projection)
         sampleOffsets(cameras_[c], y, z, &offsets_[size_t(r) * os + c * chunksPerRow() * 3]);
     }
@@ -314,19 +326,19 @@ ProjectionGrid ProjectionTable::projectionGrid() const {
   return g;
 }
 
-void ProjectionTable::projectRow(const Camera& cam, int y, int z, uint32_t* out) const {
+void ProjectionTable::projectRow(const Camera& cam, int y, int z, uint32_t* out, int begin, int end) const {
   const detail::ProjectionRow p = detail::projectionRow(cam.proj, projectionGrid(), y, z);
 #if PSFS_HAVE_X86_DISPATCH
   if (avx512KernelsActive()) {
-    projectRowAvx512(cam.proj, p, grid_.dims.x(), nxp_, out);
+    projectRowAvx512(cam.proj, p, grid_.dims.x(), begin, end, out);
     return;
   }
   if (cpuHasAvx2()) {
-    projectRowAvx2(cam.proj, p, grid_.dims.x(), nxp_, out);
+    projectRowAvx2(cam.proj, p, grid_.dims.x(), begin, end, out);
     return;
   }
 #endif
-  projectRowBody(cam.proj, p, grid_.dims.x(), nxp_, out);
+  projectRowBody(cam.proj, p, grid_.dims.x(), begin, end, out);
 }
 
 void ProjectionTable::sampleOffsets(const Camera& cam, int y, int z, uint32_t* out) const {
@@ -339,7 +351,17 @@ const uint32_t* ProjectionTable::rowCentres(size_t row, uint32_t* scratch) const
   if (precomputed_) return &centres_[row * cs];
   const int ny = grid_.dims.y();
   const int y = static_cast<int>(row % ny), z = static_cast<int>(row / ny);
-  for (size_t c = 0; c < cameras_.size(); ++c) projectRow(cameras_[c], y, z, scratch + c * nxp_);
+  for (size_t c = 0; c < cameras_.size(); ++c) projectRow(cameras_[c], y, z, scratch + c * nxp_, 0, nxp_);
+  return scratch;
+}
+
+const uint32_t* ProjectionTable::rowCentres(size_t row, uint32_t* scratch, int begin, int end) const {
+  if (begin < 0 || end > nxp_ || begin % kChunk != 0 || end % kChunk != 0)
+    throw std::invalid_argument("psfs::ProjectionTable::rowCentres: x range must be whole chunks of the row");
+  if (precomputed_) return &centres_[row * centreScratchSize()];
+  const int ny = grid_.dims.y();
+  const int y = static_cast<int>(row % ny), z = static_cast<int>(row / ny);
+  for (size_t c = 0; c < cameras_.size(); ++c) projectRow(cameras_[c], y, z, scratch + c * nxp_, begin, end);
   return scratch;
 }
 
@@ -362,7 +384,7 @@ uint32_t ProjectionTable::centre(int c, int x, int y, int z) const {
     packed = centres_[row * centreScratchSize() + size_t(c) * nxp_ + x];
   } else {
     std::vector<uint32_t> tmp(nxp_);
-    projectRow(cameras_[c], y, z, tmp.data());
+    projectRow(cameras_[c], y, z, tmp.data(), 0, nxp_);
     packed = tmp[x];
   }
   return withoutLevel(c, packed);
@@ -372,7 +394,7 @@ int ProjectionTable::footprintLevel(int c, int x, int y, int z) const {
   const size_t row = static_cast<size_t>(y) + static_cast<size_t>(grid_.dims.y()) * z;
   if (precomputed_) return footprintLevelOf(c, centres_[row * centreScratchSize() + size_t(c) * nxp_ + x]);
   std::vector<uint32_t> tmp(nxp_);
-  projectRow(cameras_[c], y, z, tmp.data());
+  projectRow(cameras_[c], y, z, tmp.data(), 0, nxp_);
   return footprintLevelOf(c, tmp[x]);
 }
 

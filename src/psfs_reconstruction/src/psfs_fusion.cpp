@@ -139,11 +139,24 @@ void PsfsFusion::fuse(const ProjectionTable& table, const ViewEvidence& evidence
           skip_->bound.fillChunks(r, &skip[r * size_t(p.chunks)], skip_->fill, p.min_views, skip_->absent,
                                   dst + r * p.nx);
         });
+  } else if (detail::skipsCentreSpace(options_)) {
+    const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
+    std::lock_guard<std::mutex> lock(skip_->mutex);
+    std::vector<uint8_t> skip;
+    skip_->last_fraction = skip_->centre.skippableChunks(table, evidence, p, options_.occluded_views,
+                                                         options_.skip_empty_below, options_.threads, &skip);
+    detail::forEachRowSpan(
+        table, options_.threads, 8, skip.data(),
+        [&](size_t r, const uint32_t* centres, const detail::RowSpan& span) { row_fn(p, centres, dst + r * p.nx, span); },
+        [&](size_t r, int begin, int end) {
+          std::fill(dst + r * p.nx + begin, dst + r * p.nx + std::min(end, p.nx), uint8_t(0));
+        },
+        first_row);
   } else {
     const detail::PsfsRowFn row_fn = detail::selectPsfsRow(options_.occluded_views, vector);
     detail::forEachRow(
         table, options_.threads, 8,
-        [&](size_t r, const uint32_t* centres) { row_fn(p, centres, dst + r * p.nx); },
+        [&](size_t r, const uint32_t* centres) { row_fn(p, centres, dst + r * p.nx, detail::RowSpan{0, p.nxp}); },
         first_row);
   }
   std::fill(dst, dst + first_row * size_t(p.nx), uint8_t(0));

@@ -71,8 +71,8 @@ uint8_t fuseTermsScalar(const PsfsRowParams& p, const TermFn& term) {
 }
 
 template <int K>
-void rowScalar(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
-  for (int x = 0; x < p.nx; ++x)
+void rowScalar(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out, const RowSpan& span) {
+  for (int x = span.begin; x < std::min(span.end, p.nx); ++x)
     out[x] = fuseTermsScalar<K>(p, [&](int c) { return centreTerm(p.views[c], centres[c * p.nxp + x]); });
 }
 

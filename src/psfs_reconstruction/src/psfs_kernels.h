@@ -29,8 +29,18 @@ namespace detail {
 
 // KernelView and PsfsRowParams: voxel_arithmetic.h (shared with the GPU).
 
-// Single projection. centres: ProjectionTable::rowCentres.
-using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, uint8_t* out);
+// The part of a grid row a kernel computes: voxels [begin, end), whole chunks of
+// ProjectionTable::kChunk (end <= nxp; the whole row is {0, nxp}). x_carry: the multi-projection
+// kernels' first -x faces (see below); the single-projection kernels have no carried sample.
+struct RowSpan {
+  int begin = 0, end = 0;              // multiples of ProjectionTable::kChunk, end <= nxp
+  const int32_t* x_carry = nullptr;    // per camera, -1: not observed; nullptr: none (begin 0)
+};
+
+// Single projection: voxels [span.begin, min(span.end, nx)) of the row into out[x]. centres:
+// ProjectionTable::rowCentres (only the span's entries are read; the vector kernels load the
+// span's last chunk masked, never past span.end).
+using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, uint8_t* out, const RowSpan& span);
 
 // k = occlusion tolerance (0..4). `vector`: the best Highway target the CPU and the
 // TABLETOP_SIMD / force*Kernels() switches allow; else Highway's portable target (SCALAR with
@@ -90,10 +100,6 @@ auto byOcclusion(int k, F&& f) {
 // only the span's entries of out, yface and zface are written (the vector kernels may read up
 // to a vector past the span's end and discard it: hence the buffers' 16 entries of padding).
 // Empty-space skipping (fusion_common.h: forEachFaceRow) computes the spans that pass the person.
-struct RowSpan {
-  int begin = 0, end = 0;              // multiples of ProjectionTable::kChunk, end <= nxp
-  const int32_t* x_carry = nullptr;    // per camera, -1: not observed; nullptr: none (begin 0)
-};
 using PsfsFaceRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres,
                                const uint32_t* offsets, uint16_t* yface, uint16_t* zface,
                                uint8_t* out, const RowSpan& span);

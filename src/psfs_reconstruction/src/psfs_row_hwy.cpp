@@ -74,11 +74,13 @@ HWY_INLINE void addCameras(const PsfsRowParams& p, const uint32_t* centres, int 
 // voxel still adds its cameras in order and is finalised by voxel_arithmetic.h: the bytes of
 // the reference (rowScalar).
 template <int K>
-void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
+void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out, const RowSpan& span) {
   constexpr int kBlock = kScalarBlock;
-  for (int i = 0; i < p.num_cameras * p.nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
-  for (int x0 = 0; x0 < p.nx; x0 += kBlock) {
-    const int n = std::min(kBlock, p.nx - x0);
+  for (int c = 0; c < p.num_cameras; ++c)
+    for (int i = span.begin; i < span.end; i += 16) __builtin_prefetch(centres + size_t(c) * p.nxp + i, 0, 0);
+  const int x_end = std::min(span.end, p.nx);
+  for (int x0 = span.begin; x0 < x_end; x0 += kBlock) {
+    const int n = std::min(kBlock, x_end - x0);
     int32_t sum[kBlock], inactive[kBlock], m[K > 0 ? K : 1][kBlock];  // of voxels x0 + i
     for (int i = 0; i < n; ++i) {
       sum[i] = inactive[i] = 0;
@@ -102,18 +104,20 @@ void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
 }
 #else
 template <int K>
-void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
+void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out, const RowSpan& span) {
   const DI di;
   const DU du;
   const int lanes = static_cast<int>(hn::Lanes(di));
   // The row's projections are read once per frame: fetch them without letting them push the
   // evidence images (gathered every frame) out of the caches.
-  for (int i = 0; i < p.num_cameras * p.nxp; i += 16) __builtin_prefetch(centres + i, 0, 0);
+  for (int c = 0; c < p.num_cameras; ++c)
+    for (int i = span.begin; i < span.end; i += 16) __builtin_prefetch(centres + size_t(c) * p.nxp + i, 0, 0);
   const VI zero = hn::Zero(di);
-  for (int x0 = 0; x0 < p.nx; x0 += lanes) {
-    // The padded row (nxp) holds whole chunks of 8; wider vectors load its last ones masked
-    // (lanes past it read pixel 0: computed, never stored).
-    const int left = p.nxp - x0;
+  const int x_end = std::min(span.end, p.nx);
+  for (int x0 = span.begin; x0 < x_end; x0 += lanes) {
+    // The span holds whole chunks of 8; wider vectors load its last ones masked (lanes past it
+    // read pixel 0: computed, never stored).
+    const int left = span.end - x0;
     VI sum = zero, inactive = zero;
     VI m[K > 0 ? K : 1];
     for (int j = 0; j < K; ++j) m[j] = hn::Set(di, ViewEvidence::kNoEvidence);
@@ -122,7 +126,7 @@ void rowHwy(const PsfsRowParams& p, const uint32_t* centres, uint8_t* out) {
       const VU uv = left >= lanes ? hn::LoadU(du, src) : hn::MaskedLoad(hn::FirstN(du, left), du, src);
       accumulateTerm<K>(centreTerm(p.views[c], uv), sum, inactive, m);
     }
-    finaliseLanes<K>(p, sum, inactive, m, out + x0, p.nx - x0);
+    finaliseLanes<K>(p, sum, inactive, m, out + x0, x_end - x0);
   }
 }
 #endif  // HWY_TARGET == HWY_SCALAR

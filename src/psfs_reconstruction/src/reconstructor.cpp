@@ -73,9 +73,9 @@ void ReconstructorParams::validate() const {
     fail("saturated_warning_fraction must lie in (0, 1]");
   if (threads < 0) fail("threads must be >= 0");
   if (hand.footprint) fail("hand.footprint is not supported (hand tables are projected on the fly)");
-  if (hand.skip_empty_below != 0.0)
-    fail("hand.skip_empty_below is not supported (it is for the workspace volumes: a hand's cube is "
-         "projected anew every frame, and most of it is the hand)");
+  if (hand.skip_empty_below != 0.0 && hand.multi_projection)
+    fail("hand.skip_empty_below needs the single projection (hand.multi_projection false): the "
+         "multi-projection bound is derived once per table, and a hand's cube moves every frame");
   if (body.footprint != skin.footprint)
     fail("body.footprint and skin.footprint must agree (one shared workspace table)");
   for (const FootprintFilter* f : {&body_footprint, &skin_footprint})
@@ -531,6 +531,7 @@ void Reconstructor::reconstruct(const std::vector<cv::Mat>& rgb,
   auto t0 = Clock::now();
   while (hand_tables_.size() < hand_rois.size()) hand_tables_.emplace_back();
   r.hands.resize(hand_rois.size());
+  r.hands_skipped = 0.0;  // (a GPU failure reruns this set on the CPU)
   // Known occlusions: per camera the body's distance, then per hand its masks and evidence (on
   // the CPU, also on the GPU path: the likelihoods are on the host, and the bytes the same).
   std::vector<cv::Mat> occluders;
@@ -560,10 +561,12 @@ void Reconstructor::reconstruct(const std::vector<cv::Mat>& rgb,
       }
       hand_evidence_.set(views, params_.hand.multi_projection, params_.threads);
       hand_fusion_.fuse(*hand_tables_[h], hand_evidence_, &r.hands[h]);
+      r.hands_skipped += hand_fusion_.lastSkippedFraction() / double(hand_rois.size());
     } else if (gpu) {
-      gpu_->fuseHand(*hand_tables_[h], &r.hands[h]);
+      r.hands_skipped += gpu_->fuseHand(*hand_tables_[h], &r.hands[h]) / double(hand_rois.size());
     } else {
       hand_fusion_.fuse(*hand_tables_[h], skin_evidence_, &r.hands[h]);
+      r.hands_skipped += hand_fusion_.lastSkippedFraction() / double(hand_rois.size());
     }
   }
   r.times.hands = msSince(t0);

@@ -7,8 +7,8 @@ namespace {
 
 void addFusionKeys(const std::string& section, PsfsOptions* o, tabletop_common::ConfigSchema* s) {
   const std::string k = "fusion/" + section + "/";
-  if (section != "hand") s->add(k + "skip_empty_below", &o->skip_empty_below);  // workspace volumes only
-  s->add(k + "threshold", &o->threshold)
+  s->add(k + "skip_empty_below", &o->skip_empty_below)
+      .add(k + "threshold", &o->threshold)
       .add(k + "occluded_views", &o->occluded_views)
       .add(k + "drop_threshold", &o->drop_threshold)
       .add(k + "min_views", &o->min_views)

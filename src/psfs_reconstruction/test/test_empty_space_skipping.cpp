@@ -289,12 +289,14 @@ TEST(EmptySpaceSkipping, RejectsLevelsThatCouldTouchTheHull) {
     o.skip_empty_below = bad;
     psfs_test::expectThrowContaining<std::invalid_argument>([&] { PsfsFusion f(o); }, "skip_empty_below");
   }
-  // The single-projection path ignores it (it has no face samples to spare).
+  // The single-projection path takes it too (its own bound: test_hand_space_skipping).
   o.multi_projection = false;
   o.skip_empty_below = 0.3;
   EXPECT_NO_THROW(PsfsFusion f(o));
-  // The hand sub-volumes refuse it (their cube is projected anew every frame).
+  // The hand sub-volumes refuse this bound (it is derived once per table, and their cube moves
+  // every frame).
   ReconstructorParams p;
+  p.hand.multi_projection = true;
   p.hand.skip_empty_below = 0.3;
   psfs_test::expectThrowContaining<std::invalid_argument>([&] { p.validate(); }, "hand.skip_empty_below");
 }

@@ -153,6 +153,11 @@ class ProjectionTable {
   // entries x >= nx are notObserved. Points into the table when precomputed, otherwise fills
   // `scratch` (centreScratchSize() entries) and returns it.
   const uint32_t* rowCentres(size_t row, uint32_t* scratch) const;
+  // The same for voxels [begin, end) of the row only (whole chunks: multiples of kChunk, end <=
+  // paddedRowLength(); throws std::invalid_argument otherwise): a table projected on the fly
+  // projects just those into scratch (the rest of it is left as it was), a stored one returns
+  // the whole row. What a fusion that skips parts of rows reads (PsfsOptions::skip_empty_below).
+  const uint32_t* rowCentres(size_t row, uint32_t* scratch, int begin, int end) const;
   // Sample offsets (multi-projection tables only): [(c * chunksPerRow() + chunk) * 3 + axis],
   // each int16 du (low) and dv (high) in 1/16 pixel, the displacement of +1/2 voxel along axis
   // (voxel centre to face centre), clamped to kMaxSampleOffsetPx.
@@ -182,7 +187,7 @@ class ProjectionTable {
   };
   void build();
   void checkFootprintRows(const std::vector<Camera>& cams) const;
-  void projectRow(const Camera& cam, int y, int z, uint32_t* out) const;
+  void projectRow(const Camera& cam, int y, int z, uint32_t* out, int begin, int end) const;
   void sampleOffsets(const Camera& cam, int y, int z, uint32_t* out) const;
   static Camera prepareCamera(const tabletop_capture::CameraModel& m, int index);
 

@@ -103,14 +103,20 @@ struct PsfsOptions {
   // them (it carries the faces from layer to layer). On a GPU no thread below fuses, but an
   // on-the-fly table is still projected whole.
   double floor_z = -std::numeric_limits<double>::infinity();
-  // Empty-space skipping of the multi-projection test (the single-projection and footprint
-  // paths ignore it; 0 = off), in [0, threshold): runs of 8 voxels along x whose
+  // Empty-space skipping (0 = off), in [0, threshold); the footprint path ignores it.
+  // Multi-projection test: runs of 8 voxels along x whose
   // voxels a bound of the posterior (from the largest 2x2 minimum of the likelihood in the 8x8
   // pixel tiles around their footprints) puts below this level are not fused but set to the
   // background's posterior (every camera's commonest likelihood, fused: what empty space far
   // from the person is). Every voxel at or above the level (the hull included) keeps its byte;
   // only a structure under 2 px wide in a view could be lost. src/empty_space_bound.h
   // explains the bound; docs/benchmarks.md has the cost and the trackers' figures.
+  // Single projection (the hand sub-volumes): a strict bound (the largest likelihood under
+  // each 4x4x4 cell in every view) with a margin of two voxels; runs of 8 voxels it puts below
+  // the level are set to 0 and not projected. Every voxel at or above the level and every
+  // voxel within 2 of one keeps its byte, so a mesh at an iso above the level is the same
+  // (src/centre_space_bound.h). Workspace volumes on this path skip the same way (0, not the
+  // background's posterior).
   double skip_empty_below = 0.0;
   int threads = 0;                 // OpenMP threads (0 = OpenMP default)
 };

@@ -139,10 +139,15 @@ struct ReconstructorParams {
     return o;
   }
   // No tolerated view: the hands' known occlusions are masked instead (hand_occlusion_masks;
-  // without the masks, 1 keeps a hand that the trunk hides in one view).
+  // without the masks, 1 keeps a hand that the trunk hides in one view). Empty space skipped
+  // below 0.5 with a strict bound and a margin of two voxels: the voxels at or above 0.5 and
+  // those within 2 of them (all that marching cubes at an iso above 0.5 reads, normals
+  // included) as without it (src/centre_space_bound.h; docs/benchmarks.md, "pSfS: empty-space
+  // skipping in the hand sub-volumes").
   static PsfsOptions defaultHand() {
     PsfsOptions o;
     o.occluded_views = 0;
+    o.skip_empty_below = 0.5;
     return o;
   }
   // Throws std::invalid_argument naming the field.
@@ -167,6 +172,9 @@ struct FrameResult {
   bool learning_skipped = false;
   ProbabilityVolume body, skin;
   std::vector<ProbabilityVolume> hands;  // one per requested ROI, same order
+  // Share of the hand sub-volumes' voxels that empty-space skipping left out (mean over the
+  // hands; 0 without hands or skipping; hand.skip_empty_below).
+  double hands_skipped = 0.0;
   std::vector<ClassificationStats> stats;
   // The trunk's colour measured in this set (clothing_colour.h; valid false when off or not
   // found); the classifier uses the running estimate from the next set on.

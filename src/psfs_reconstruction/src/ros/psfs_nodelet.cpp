@@ -517,6 +517,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     body_ms_.add(t.body);
     skin_ms_.add(t.skin);
     hands_ms_.add(t.hands);
+    if (!r.hands.empty()) hands_skipped_.add(100.0 * r.hands_skipped);
     background_ms_.add(t.background);
     total_ms_.add((ros::WallTime::now() - t0).toSec() * 1e3);
     ++reconstructed_;
@@ -664,6 +665,7 @@ class PsfsNodelet : public nodelet::Nodelet {
     stat.add("body fusion (ms)", body_ms_.mean());
     stat.add("skin fusion (ms)", skin_ms_.mean());
     stat.add("hand volumes (ms)", hands_ms_.mean());
+    stat.add("hand volumes skipped (%)", hands_skipped_.mean());
     stat.add("background update (ms)", background_ms_.mean());
     stat.add("total (ms)", total_ms_.mean());
     stat.add("total max (ms)", total_ms_.max());
@@ -742,6 +744,7 @@ class PsfsNodelet : public nodelet::Nodelet {
   std::map<std::string, ros::WallTime> warned_;
   // Per-stage times over the whole run (the demo's summary reads the means).
   RunningStats classify_ms_, evidence_ms_, body_ms_, skin_ms_, hands_ms_, background_ms_, total_ms_;
+  RunningStats hands_skipped_;  // % of the hand sub-volumes' voxels empty-space skipping left out
   RunningStats clothing_ms_, prefilter_ms_;
 };
 

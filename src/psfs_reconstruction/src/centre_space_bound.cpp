@@ -1,0 +1,433 @@
+#include "centre_space_bound.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "cpu_dispatch.h"
+#include "empty_space_bound.h"
+#include "voxel_projection.h"
+
+#include <Eigen/Core>
+
+namespace psfs {
+namespace detail {
+namespace {
+
+// Slack (1/16 px) around the box of a cell's projected corners, before the lens: without
+// distortion the centres' images lie in the hull of the corners' images and truncation to
+// 1/16 px is monotone, so 2 only covers float against float (the lattice's row constants and
+// the voxels' differ in their last bits). The distortion's share is per box (lensSlack16).
+constexpr int kSlack16 = 2;
+
+// The pixels whose centres the positions [a16, b16] (PackedUV units: 16 (u + 1/2), truncated)
+// can round to, widened by `slack` (1/16 px): floor((a16 - slack) / 16) .. floor((b16 + slack) / 16).
+inline int pixelLow(int a16, int slack) {
+  const int a = a16 - slack;
+  return a >= 0 ? a >> 4 : -((15 - a) >> 4);
+}
+inline int pixelHigh(int b16, int slack) { return (b16 + slack) >> 4; }
+
+// An upper bound of the second derivative of the camera's distortion (normalised coordinates,
+// the norm of D''[d, d] over unit directions d) over the image: second differences on a grid
+// of points over the image's normalised extent (within the lens model's valid radius), along
+// the axes and diagonals, doubled for the points and directions between the samples. 0
+// without distortion. With it, the image of a box whose corners' images span a diameter L
+// (normalised) lies within C2 L^2 / 2 of their hull (Taylor: q = sum l_i q_i, D(q_i) = D(q) +
+// J (q_i - q) + R_i, |R_i| <= C2 |q_i - q|^2 / 2).
+double distortionCurvature(const tabletop_capture::CameraModel& m, float r2_max) {
+  if (!m.hasDistortion()) return 0.0;
+  const double xs = 1.3 * std::max(m.cx, m.width - m.cx) / m.fx, ys = 1.3 * std::max(m.cy, m.height - m.cy) / m.fy;
+  const double r2 = std::isfinite(r2_max) ? double(r2_max) : std::numeric_limits<double>::infinity();
+  constexpr int kSamples = 16;
+  constexpr double h = 1e-3;
+  const Eigen::Vector2d dirs[4] = {{1, 0}, {0, 1}, {M_SQRT1_2, M_SQRT1_2}, {M_SQRT1_2, -M_SQRT1_2}};
+  double c2 = 0.0;
+  for (int j = 0; j <= kSamples; ++j)
+    for (int i = 0; i <= kSamples; ++i) {
+      const Eigen::Vector2d q(xs * (2.0 * i / kSamples - 1.0), ys * (2.0 * j / kSamples - 1.0));
+      if (q.squaredNorm() > r2) continue;
+      const Eigen::Vector2d d0 = m.distort(q);
+      for (const Eigen::Vector2d& d : dirs)
+        c2 = std::max(c2, (m.distort(q + h * d) - 2.0 * d0 + m.distort(q - h * d)).norm() / (h * h));
+    }
+  return 2.0 * c2;
+}
+
+}  // namespace
+
+CentreSpaceBound::PixelBox CentreSpaceBound::boxPixels(int c, int X0, int Y0, int Z0, int X1, int Y1, int Z1) const {
+  const ProjectionTable& lt = *lattice_table_;
+  const uint32_t none = PackedUV::notObserved(lt.camera(c).height);
+  const uint32_t* packed = lt.rowCentres(0, nullptr);  // stored: [row][camera][x]
+  const size_t row_stride = size_t(cameras_) * lt.paddedRowLength(), py = size_t(cy_) + 1;
+  PixelBox b;
+  int u0 = std::numeric_limits<int>::max(), u1 = -1, v0 = u0, v1 = -1;
+  for (int i = 0; i < 8; ++i) {
+    const size_t row = size_t(i & 2 ? Y1 : Y0) + py * size_t(i & 4 ? Z1 : Z0);
+    const uint32_t q = packed[row * row_stride + size_t(c) * lt.paddedRowLength() + size_t(i & 1 ? X1 : X0)];
+    b.unknown = b.unknown || q == none;
+    const int u = int(q & 0xFFFFu), v = int(q >> 16);
+    u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+  }
+  if (b.unknown) return b;
+  const int slack = kSlack16 + (lens_k_[size_t(c)] > 0.0 ? lensSlack16(c, u1 - u0, v1 - v0) : 0);
+  b.u0 = pixelLow(u0, slack), b.u1 = pixelHigh(u1, slack);
+  b.v0 = pixelLow(v0, slack), b.v1 = pixelHigh(v1, slack);
+  return b;
+}
+
+int CentreSpaceBound::lensSlack16(int c, int du16, int dv16) const {
+  // C2 L^2 / 2 in pixels (times f), L^2 from the distorted extent in 1/16 px: (du^2 + dv^2) / (16 f)^2,
+  // times 2.25 for distorted against undistorted extent (a factor of 1.5 in the radial scale).
+  const double slack = lens_k_[size_t(c)] * (double(du16) * du16 + double(dv16) * dv16);
+  return slack > 1e6 ? 1000000 : int(std::ceil(slack));
+}
+
+
+void TermTiles::set(const uint8_t* bytes, size_t stride, int step, int width, int height, const cv::Mat& active,
+                    const int16_t* terms, int u0, int v0, int u1, int v1) {
+  if (u1 < u0 || v1 < v0) {
+    tiles_x = tiles_y = 0;
+    return;
+  }
+  tx0 = u0 / kTile, ty0 = v0 / kTile;
+  tiles_x = u1 / kTile - tx0 + 1, tiles_y = v1 / kTile - ty0 + 1;
+  for (auto& l : level_) l.resize(size_t(tiles_x) * tiles_y);
+  // Whole tiles (clipped to the image), so a rectangle's tiles hold every pixel of it.
+  const int pu0 = tx0 * kTile, pu1 = std::min(width - 1, (tx0 + tiles_x) * kTile - 1);
+  const int pv0 = ty0 * kTile, pv1 = std::min(height - 1, (ty0 + tiles_y) * kTile - 1);
+  const int n = pu1 - pu0 + 1;
+  std::vector<int16_t> col_max(static_cast<size_t>(n));
+  std::vector<uint8_t> col_off(static_cast<size_t>(n));
+  for (int ty = 0; ty < tiles_y; ++ty) {
+    std::fill(col_max.begin(), col_max.end(), int16_t(-1));
+    std::fill(col_off.begin(), col_off.end(), uint8_t(0));
+    for (int v = pv0 + ty * kTile; v <= std::min(pv1, pv0 + ty * kTile + kTile - 1); ++v) {
+      const uint8_t* row = bytes + size_t(v) * stride + size_t(pu0) * step;
+      const uint8_t* a = active.empty() ? nullptr : active.ptr<uint8_t>(v) + pu0;
+      const int16_t* t = terms ? terms + size_t(v) * width + pu0 : nullptr;
+      int16_t* __restrict cm = col_max.data();
+      uint8_t* __restrict co = col_off.data();
+      if (step == 1 && !a && !t) {  // every pixel gives evidence (the common case)
+        for (int i = 0; i < n; ++i) cm[i] = std::max(cm[i], int16_t(row[i]));
+      } else if (step == 1 && t) {  // the evidence's switched-off pixels (known occlusions)
+        for (int i = 0; i < n; ++i) {
+          const bool off = t[i] > 0;
+          cm[i] = std::max(cm[i], off ? int16_t(-1) : int16_t(row[i]));
+          co[i] |= uint8_t(off);
+        }
+      } else {
+        for (int i = 0; i < n; ++i) {
+          const bool off = a ? a[i] == 0 : t ? t[i] > 0 : false;
+          cm[i] = std::max(cm[i], off ? int16_t(-1) : int16_t(row[size_t(i) * step]));
+          co[i] |= uint8_t(off);
+        }
+      }
+    }
+    for (int tx = 0; tx < tiles_x; ++tx) {
+      int m = -1;
+      uint8_t o = 0;
+      for (int i = tx * kTile; i < std::min(n, (tx + 1) * kTile); ++i)
+        m = std::max(m, int(col_max[size_t(i)])), o |= col_off[size_t(i)];
+      level_[0][size_t(ty) * tiles_x + tx] = pack(m, o);
+    }
+  }
+  // Squares of 2^l x 2^l tiles (top-left tile (tx, ty); clamped at the window's edge): any
+  // rectangle of tiles is the union of a few of them.
+  for (int l = 1; l < kLevels; ++l) {
+    const std::vector<uint16_t>& src = level_[l - 1];
+    std::vector<uint16_t>& dst = level_[l];
+    const int h = 1 << (l - 1);
+    for (int ty = 0; ty < tiles_y; ++ty) {
+      const uint16_t* r0 = &src[size_t(ty) * tiles_x];
+      const uint16_t* r1 = &src[size_t(std::min(ty + h, tiles_y - 1)) * tiles_x];
+      uint16_t* out = &dst[size_t(ty) * tiles_x];
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        const int tx2 = std::min(tx + h, tiles_x - 1);
+        out[tx] = combine(combine(r0[tx], r0[tx2]), combine(r1[tx], r1[tx2]));
+      }
+    }
+  }
+}
+
+void TermTiles::rectMax(int u0, int v0, int u1, int v1, int* max_byte_out, bool* off_out) const {
+  const int a0 = u0 / kTile - tx0, a1 = u1 / kTile - tx0, b0 = v0 / kTile - ty0, b1 = v1 / kTile - ty0;
+  const int side = std::min(a1 - a0, b1 - b0) + 1;
+  const int l = side >= 4 ? 2 : side >= 2 ? 1 : 0;
+  const int step = 1 << l;
+  const uint16_t* t = level_[l].data();
+  uint16_t r = pack(-1, false);
+  for (int b = b0;; b += step) {
+    const int bb = std::min(b, b1 - step + 1);
+    for (int a = a0;; a += step) {
+      const int aa = std::min(a, a1 - step + 1);
+      r = combine(r, t[size_t(bb) * tiles_x + aa]);
+      if (aa == a1 - step + 1) break;
+    }
+    if (bb == b1 - step + 1) break;
+  }
+  *max_byte_out = int(r & 0x1FF) - 1;
+  *off_out = (r & 0x8000) != 0;
+}
+
+void CentreSpaceBound::projectLattice(const ProjectionTable& table, int threads) {
+  const VoxelGrid& g = table.grid();
+  nx_ = g.dims.x(), ny_ = g.dims.y(), nz_ = g.dims.z();
+  cx_ = (nx_ + kCell - 1) / kCell, cy_ = (ny_ + kCell - 1) / kCell, cz_ = (nz_ + kCell - 1) / kCell;
+  cameras_ = table.numCameras();
+  if (cameras_ > kMaxBoundCameras) throw std::invalid_argument("psfs::CentreSpaceBound: more than 64 cameras");
+  // The cells' face corners, origin + kCell s (X, Y, Z), are the centres of a grid of voxels kCell
+  // times as large, shifted by half of one: projected by the table's own code (a stored table,
+  // built in parallel), at 1/16 px. The last corner along an axis may lie past the grid's end
+  // (a larger box: still a bound).
+  VoxelGrid lattice;
+  lattice.origin = g.origin - Eigen::Vector3d::Constant(0.5 * kCell * g.voxel_size);
+  lattice.voxel_size = kCell * g.voxel_size;
+  lattice.dims = Eigen::Vector3i(cx_ + 1, cy_ + 1, cz_ + 1);
+  std::vector<tabletop_capture::CameraModel> cameras;
+  for (int c = 0; c < cameras_; ++c) cameras.push_back(table.camera(c));
+  // The lens slack's factor per camera, derived again when a camera's intrinsics change.
+  bool same = lens_cameras_.size() == cameras.size();
+  for (size_t c = 0; same && c < cameras.size(); ++c) {
+    const auto& a = lens_cameras_[c];
+    const auto& b = cameras[c];
+    same = a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
+           a.cy == b.cy && a.distortion == b.distortion;
+  }
+  if (!same) {
+    lens_k_.assign(cameras.size(), 0.0);
+    for (size_t c = 0; c < cameras.size(); ++c) {
+      const auto& m = cameras[c];
+      const double f_min = std::min(m.fx, m.fy), f_max = std::max(m.fx, m.fy);
+      // 16 (1/16 px) * f_max * C2 * 2.25 / (2 (16 f_min)^2) per (1/16 px)^2 of extent.
+      lens_k_[c] = 16.0 * f_max * distortionCurvature(m, table.projectionCamera(int(c)).r2_max) * 2.25 /
+                   (2.0 * 256.0 * f_min * f_min);
+    }
+    lens_cameras_ = cameras;
+  }
+  if (!lattice_table_) {
+    ProjectionTableOptions o;
+    o.storage = TableStorage::kPrecomputed;
+    o.threads = threads;
+    lattice_table_ = std::make_unique<ProjectionTable>(lattice, cameras, o);
+  } else {
+    lattice_table_->update(lattice, cameras);
+  }
+}
+
+template <class SetTiles>
+double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles& set_tiles, const PsfsRowParams& p,
+                                    int k, double max_probability, int threads, std::vector<uint8_t>* flags) {
+  const int32_t limit_per_view = boundLimitPerView(p, max_probability);
+  projectLattice(table, threads);
+  const ProjectionTable& lt = *lattice_table_;
+  const int px = cx_ + 1, py = cy_ + 1, pz = cz_ + 1, lnxp = lt.paddedRowLength();
+  const uint32_t* packed = lt.rowCentres(0, nullptr);  // stored: [row][camera][x]
+  const size_t row_stride = size_t(cameras_) * lnxp;
+  auto corner = [&](int X, int Y, int Z, int c) { return packed[(size_t(Y) + size_t(py) * Z) * row_stride + size_t(c) * lnxp + X]; };
+  // Each camera's window: the pixels the projected corners can round to.
+  windows_.assign(size_t(cameras_) * 4, 0);
+  tiles_.resize(size_t(cameras_));
+#pragma omp parallel for num_threads(resolveThreads(threads)) schedule(dynamic, 1)
+  for (int c = 0; c < cameras_; ++c) {
+    const uint32_t none = PackedUV::notObserved(table.camera(c).height);
+    int u0 = std::numeric_limits<int>::max(), u1 = -1, v0 = u0, v1 = -1;
+    for (int Z = 0; Z < pz; ++Z)
+      for (int Y = 0; Y < py; ++Y)
+        for (int X = 0; X < px; ++X) {
+          const uint32_t q = corner(X, Y, Z, c);
+          if (q == none) continue;
+          const int u = int(q & 0xFFFFu), v = int(q >> 16);
+          u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+        }
+    // The largest lens slack of any box (a block's, which holds its cells' boxes).
+    int slack = kSlack16;
+    if (lens_k_[size_t(c)] > 0.0)
+      for (int Z = 0; Z < cz_; Z += 2)
+        for (int Y = 0; Y < cy_; Y += 2)
+          for (int X = 0; X < cx_; X += 2) {
+            int a0 = std::numeric_limits<int>::max(), a1 = -1, b0 = a0, b1 = -1;
+            for (int i = 0; i < 8; ++i) {
+              const uint32_t q = corner(std::min(cx_, X + 2 * (i & 1)), std::min(cy_, Y + (i & 2)),
+                                        std::min(cz_, Z + ((i >> 1) & 2)), c);
+              if (q == none) continue;
+              a0 = std::min(a0, int(q & 0xFFFFu)), a1 = std::max(a1, int(q & 0xFFFFu));
+              b0 = std::min(b0, int(q >> 16)), b1 = std::max(b1, int(q >> 16));
+            }
+            if (a1 >= 0) slack = std::max(slack, kSlack16 + lensSlack16(c, a1 - a0, b1 - b0));
+          }
+    const int w = table.camera(c).width, h = table.camera(c).height;
+    int* win = &windows_[size_t(c) * 4];
+    win[0] = std::max(0, pixelLow(u0, slack)), win[1] = std::max(0, pixelLow(v0, slack));
+    win[2] = std::min(w - 1, pixelHigh(u1, slack)), win[3] = std::min(h - 1, pixelHigh(v1, slack));
+    set_tiles(c, &tiles_[size_t(c)], win[0], win[1], win[2], win[3]);
+  }
+  const size_t n_cells = size_t(cx_) * cy_ * cz_;
+  below_.assign(n_cells, 0);
+  const int first_layer = std::clamp(p.first_layer, 0, nz_);
+  // Without occlusion tolerance a cell is below as soon as the bounds of the cameras that see
+  // all of it sum below C limit: no voxel has more than C views, every further term is <= 0,
+  // and a voxel with fewer views than min_views fuses to 0 (limit <= 0: a level reachable at all).
+  int32_t terms[256];  // the log term of each byte (ViewEvidence::logTerm)
+  for (int v = 0; v < 256; ++v) terms[v] = ViewEvidence::logTerm(v);
+  const bool early = k == 0 && limit_per_view <= 0;
+  const int64_t early_sum = int64_t(cameras_) * limit_per_view;
+  // Whether every voxel of the box of cells [X0, X1) x [Y0, Y1) x [Z0, Z1) fuses below the level:
+  // its image in each camera lies in the box of its 8 corners' images (a convex hull).
+  auto boxBelow = [&](int X0, int Y0, int Z0, int X1, int Y1, int Z1) {
+    int32_t all[kMaxBoundCameras], some[kMaxBoundCameras];
+    int n_all = 0, n_some = 0;
+    int64_t sum_all = 0;
+    for (int c = 0; c < cameras_; ++c) {
+      const PixelBox box = boxPixels(c, X0, Y0, Z0, X1, Y1, Z1);
+      // A corner outside the image or the lens model's range: where the cell's voxels land
+      // is not known, so the camera may give any of them any evidence (a term <= 0).
+      if (box.unknown) {
+        some[n_some++] = 0;
+        continue;
+      }
+      const int w = table.camera(c).width, h = table.camera(c).height;
+      const int ru0 = box.u0, ru1 = box.u1, rv0 = box.v0, rv1 = box.v1;
+      const bool inside = ru0 >= 0 && ru1 <= w - 1 && rv0 >= 0 && rv1 <= h - 1;
+      int m;
+      bool off;
+      tiles_[size_t(c)].rectMax(std::max(ru0, 0), std::max(rv0, 0), std::min(ru1, w - 1), std::min(rv1, h - 1), &m,
+                                &off);
+      if (m < 0) continue;  // no pixel there gives evidence
+      const int32_t b = terms[m];
+      if (inside && !off) {
+        all[n_all++] = b;
+        sum_all += b;
+        if (early && sum_all < early_sum) return true;
+      } else {
+        some[n_some++] = b;
+      }
+    }
+    return boundBelow(all, n_all, some, n_some, p, k, limit_per_view);
+  };
+  // Blocks of 2 x 2 x 2 cells first: far from the hand a block is below as a whole (a looser
+  // box, a quarter of the work), the cells of the others one by one.
+  const int bx = (cx_ + 1) / 2, by = (cy_ + 1) / 2, bz = (cz_ + 1) / 2;
+#pragma omp parallel for num_threads(resolveThreads(threads)) schedule(dynamic, 1)
+  for (int BZ = 0; BZ < bz; ++BZ)
+    for (int BY = 0; BY < by; ++BY)
+      for (int BX = 0; BX < bx; ++BX) {
+        const int X0 = 2 * BX, Y0 = 2 * BY, Z0 = 2 * BZ;
+        const int X1 = std::min(cx_, X0 + 2), Y1 = std::min(cy_, Y0 + 2), Z1 = std::min(cz_, Z0 + 2);
+        if (Z1 * kCell <= first_layer || boxBelow(X0, Y0, Z0, X1, Y1, Z1)) {  // (under the floor: 0)
+          for (int Z = Z0; Z < Z1; ++Z)
+            for (int Y = Y0; Y < Y1; ++Y)
+              for (int X = X0; X < X1; ++X) below_[(size_t(Z) * cy_ + Y) * cx_ + X] = 1;
+          continue;
+        }
+        for (int Z = Z0; Z < Z1; ++Z)
+          for (int Y = Y0; Y < Y1; ++Y)
+            for (int X = X0; X < X1; ++X)
+              below_[(size_t(Z) * cy_ + Y) * cx_ + X] =
+                  uint8_t((Z + 1) * kCell <= first_layer || boxBelow(X, Y, Z, X + 1, Y + 1, Z + 1));
+      }
+  // The margin: a chunk of a row is skipped when the cells of the voxels within 2 of its voxels
+  // along each axis (voxels 8a - 2 .. 8a + 9 of rows y - 2 .. y + 2 in layers z - 2 .. z + 2) are
+  // all below; marching cubes reads a crossed edge's voxels and, for the normals, their
+  // central differences, so no voxel it reads near a voxel above the level is skipped. First
+  // per cell row and chunk the cells along x, then per grid row the one or two cell rows along
+  // y and z those voxels lie in (outside the grid counts as below).
+  const int chunks = table.chunksPerRow();
+  auto cellOf = [](int v) { return v < 0 ? -1 : v / kCell; };
+  x_below_.assign(size_t(cy_) * cz_ * chunks, 0);
+  for (int Z = 0; Z < cz_; ++Z)
+    for (int Y = 0; Y < cy_; ++Y) {
+      const uint8_t* b = &below_[(size_t(Z) * cy_ + Y) * cx_];
+      for (int a = 0; a < chunks; ++a) {
+        bool all = true;
+        for (int X = std::max(0, cellOf(a * kChunk - 2)); X <= std::min(cx_ - 1, cellOf(a * kChunk + kChunk + 1)); ++X)
+          all = all && b[X];
+        x_below_[(size_t(Z) * cy_ + Y) * chunks + a] = uint8_t(all);
+      }
+    }
+  flags->assign(size_t(ny_) * nz_ * chunks, 0);
+  size_t skipped = 0;
+  for (int z = first_layer; z < nz_; ++z) {
+    const int z0 = std::max(0, cellOf(z - 2)), z1 = std::min(cz_ - 1, cellOf(z + 2));
+    int y0_prev = -1, y1_prev = -1;
+    size_t n_prev = 0;
+    for (int y = 0; y < ny_; ++y) {
+      uint8_t* f = flags->data() + (size_t(y) + size_t(ny_) * z) * chunks;
+      const int y0 = std::max(0, cellOf(y - 2)), y1 = std::min(cy_ - 1, cellOf(y + 2));
+      if (y0 == y0_prev && y1 == y1_prev) {  // the same cells as the row before (most rows)
+        std::copy(f - chunks, f, f);
+        skipped += n_prev;
+        continue;
+      }
+      y0_prev = y0, y1_prev = y1;
+      std::fill(f, f + chunks, uint8_t(1));
+      for (int Z = z0; Z <= z1; ++Z)
+        for (int Y = y0; Y <= y1; ++Y) {
+          const uint8_t* xb = &x_below_[(size_t(Z) * cy_ + Y) * chunks];
+          for (int a = 0; a < chunks; ++a) f[a] &= xb[a];
+        }
+      n_prev = 0;
+      for (int a = 0; a < chunks; ++a)
+        if (f[a]) n_prev += size_t(std::min(nx_, (a + 1) * kChunk) - a * kChunk);
+      skipped += n_prev;
+    }
+  }
+  const size_t voxels = size_t(nx_) * ny_ * nz_;
+  return voxels == 0 ? 0.0 : double(skipped) / double(voxels);
+}
+
+double CentreSpaceBound::skippableChunks(const ProjectionTable& table, const ViewEvidence& evidence,
+                                         const PsfsRowParams& p, int k, double max_probability, int threads,
+                                         std::vector<uint8_t>* flags) {
+  if (evidence.numViews() != table.numCameras())
+    throw std::invalid_argument("psfs::CentreSpaceBound: evidence for " + std::to_string(evidence.numViews()) +
+                                " cameras, table has " + std::to_string(table.numCameras()));
+  return flagChunks(
+      table,
+      [&](int c, TermTiles* t, int u0, int v0, int u1, int v1) {
+        const int w = evidence.width(c), h = evidence.height(c);
+        t->set(evidence.likelihood(c), size_t(w), 1, w, h, cv::Mat(),
+               evidence.hasInactivePixels(c) ? evidence.terms(c) : nullptr, u0, v0, u1, v1);
+      },
+      p, k, max_probability, threads, flags);
+}
+
+double CentreSpaceBound::skippableChunks(const ProjectionTable& table, const std::vector<ViewImage>& views,
+                                         const PsfsRowParams& p, int k, double max_probability, int threads,
+                                         std::vector<uint8_t>* flags) {
+  if (int(views.size()) != table.numCameras())
+    throw std::invalid_argument("psfs::CentreSpaceBound: " + std::to_string(views.size()) + " views, table has " +
+                                std::to_string(table.numCameras()) + " cameras");
+  for (int c = 0; c < table.numCameras(); ++c) {
+    const cv::Mat& l = views[size_t(c)].likelihood;
+    if (l.depth() != CV_8U || l.cols != table.camera(c).width || l.rows != table.camera(c).height ||
+        views[size_t(c)].channel < 0 || views[size_t(c)].channel >= l.channels() ||
+        (!views[size_t(c)].active.empty() && (views[size_t(c)].active.type() != CV_8UC1 ||
+                                              views[size_t(c)].active.size() != l.size())))
+      throw std::invalid_argument("psfs::CentreSpaceBound: view " + std::to_string(c) +
+                                  " is not an 8-bit image of its camera's size (or its channel or mask is wrong)");
+  }
+  return flagChunks(
+      table,
+      [&](int c, TermTiles* t, int u0, int v0, int u1, int v1) {
+        const ViewImage& v = views[size_t(c)];
+        t->set(v.likelihood.ptr<uint8_t>(0) + v.channel, v.likelihood.step[0], v.likelihood.channels(),
+               v.likelihood.cols, v.likelihood.rows, v.active, nullptr, u0, v0, u1, v1);
+      },
+      p, k, max_probability, threads, flags);
+}
+
+void zeroChunks(const ProjectionTable& table, const std::vector<uint8_t>& flags, ProbabilityVolume* out) {
+  const int nx = table.grid().dims.x(), chunks = table.chunksPerRow();
+  for (size_t r = 0; r < table.grid().numRows(); ++r)
+    for (int a = 0; a < chunks; ++a)
+      if (flags[r * chunks + a])
+        std::fill(out->data.begin() + r * nx + a * kVoxChunk, out->data.begin() + r * nx + std::min(nx, (a + 1) * kVoxChunk),
+                  uint8_t(0));
+}
+
+}  // namespace detail
+}  // namespace psfs
