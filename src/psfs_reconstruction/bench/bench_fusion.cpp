@@ -291,7 +291,7 @@ BENCHMARK(BM_PsfsSkipEmpty)
 struct PipelineFrame {
   std::vector<tabletop_capture::CameraModel> cameras;
   std::vector<ViewImage> views[2];
-  ViewEvidence evidence[2], single;
+  ViewEvidence evidence[2], single, single_skin;
   PipelineFrame() {
     tabletop_sim::SimOptions so;
     so.script = "wave";
@@ -307,6 +307,7 @@ struct PipelineFrame {
       evidence[k].set(views[k], true);
     }
     single.set(views[0], false);
+    single_skin.set(views[1], false);
   }
 };
 PipelineFrame& pipelineFrame() {
@@ -337,6 +338,33 @@ void BM_PsfsPipelineFrame(benchmark::State& st) {
               (avx512KernelsActive() ? ", AVX-512" : ", AVX2"));
 }
 BENCHMARK(BM_PsfsPipelineFrame)
+    ->ArgsProduct({{0, 1}, {0, 50}, {1, 2}})
+    ->ArgNames({"skin", "below_pct", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// The 128x128x96 grid (7.8 mm) on the same frame: the single projection (its default, one pixel
+// per voxel and camera; range(0): 0 body, 1 skin) with the strict bound's skipping below
+// range(1) percent (0 = off; src/centre_space_bound.h), range(2): threads. Baseline:
+// BM_BinaryPipelineFrame8.
+void BM_PsfsPipelineFrame8(benchmark::State& st) {
+  PipelineFrame& w = pipelineFrame();
+  const int kind = static_cast<int>(st.range(0));
+  const ProjectionTable table(referenceGrid(Resolution::k8mm), w.cameras);
+  PsfsOptions o = kind ? ReconstructorParams::defaultSkin() : ReconstructorParams::defaultBody();
+  o.multi_projection = false;
+  o.skip_empty_below = double(st.range(1)) / 100.0;
+  o.threads = static_cast<int>(st.range(2));
+  const PsfsFusion fusion(o);
+  ProbabilityVolume out;
+  for (auto _ : st) {
+    fusion.fuse(table, kind ? w.single_skin : w.single, &out);
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  st.counters["voxels_skipped"] = fusion.lastSkippedFraction();
+  st.counters["voxels_from_half"] = double(countAbove(out, 127)) / double(out.data.size());
+  st.SetLabel(std::string(kind ? "skin" : "body") + ", default scenario frame 60, 128x128x96 single projection" +
+              (avx512KernelsActive() ? ", AVX-512" : ", AVX2"));
+}
+BENCHMARK(BM_PsfsPipelineFrame8)
     ->ArgsProduct({{0, 1}, {0, 50}, {1, 2}})
     ->ArgNames({"skin", "below_pct", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
 
@@ -375,6 +403,13 @@ void BM_BinaryPipelineFrame(benchmark::State& st) {
   st.SetLabel("body, default scenario frame 60");
 }
 BENCHMARK(BM_BinaryPipelineFrame)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_BinaryPipelineFrame8(benchmark::State& st) {
+  PipelineFrame& w = pipelineFrame();
+  carveLoop(st, ProjectionTable(referenceGrid(Resolution::k8mm), w.cameras), w.single, static_cast<int>(st.range(0)));
+  st.SetLabel("body, default scenario frame 60, 128x128x96");
+}
+BENCHMARK(BM_BinaryPipelineFrame8)->Arg(1)->Arg(2)->ArgName("threads")->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_BinarySilhouettes(benchmark::State& st) {
   Workload& w = workload();

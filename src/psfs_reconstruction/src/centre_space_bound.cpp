@@ -277,12 +277,34 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
   const int64_t early_sum = int64_t(cameras_) * limit_per_view;
   // Whether every voxel of the box of cells [X0, X1) x [Y0, Y1) x [Z0, Z1) fuses below the level:
   // its image in each camera lies in the box of its 8 corners' images (a convex hull).
-  auto boxBelow = [&](int X0, int Y0, int Z0, int X1, int Y1, int Z1) {
+  // A grid that stays where it was (the workspace's) keeps its boxes from its second frame on;
+  // one that moves (a hand's cube) derives the boxes it needs as it goes.
+  const int bx = (cx_ + 1) / 2, by = (cy_ + 1) / 2, bz = (cz_ + 1) / 2;  // blocks of 2 x 2 x 2 cells
+  const uint64_t revision = lattice_table_->revision();
+  if (revision == last_revision_ && boxes_revision_ != revision) {
+    cell_boxes_.resize(n_cells * cameras_);
+    block_boxes_.resize(size_t(bx) * by * bz * cameras_);
+#pragma omp parallel for num_threads(resolveThreads(threads)) schedule(static)
+    for (int Z = 0; Z < cz_; ++Z)
+      for (int Y = 0; Y < cy_; ++Y)
+        for (int X = 0; X < cx_; ++X)
+          for (int c = 0; c < cameras_; ++c) {
+            cell_boxes_[((size_t(Z) * cy_ + Y) * cx_ + X) * cameras_ + c] = boxPixels(c, X, Y, Z, X + 1, Y + 1, Z + 1);
+            if (X % 2 == 0 && Y % 2 == 0 && Z % 2 == 0)
+              block_boxes_[((size_t(Z / 2) * by + Y / 2) * bx + X / 2) * cameras_ + c] =
+                  boxPixels(c, X, Y, Z, std::min(cx_, X + 2), std::min(cy_, Y + 2), std::min(cz_, Z + 2));
+          }
+    boxes_revision_ = revision;
+  }
+  last_revision_ = revision;
+  const bool cached = boxes_revision_ == revision;
+  // cache: the box's entries of cell_boxes_ / block_boxes_ when cached, else nullptr.
+  auto boxBelow = [&](int X0, int Y0, int Z0, int X1, int Y1, int Z1, const PixelBox* cache) {
     int32_t all[kMaxBoundCameras], some[kMaxBoundCameras];
     int n_all = 0, n_some = 0;
     int64_t sum_all = 0;
     for (int c = 0; c < cameras_; ++c) {
-      const PixelBox box = boxPixels(c, X0, Y0, Z0, X1, Y1, Z1);
+      const PixelBox box = cache ? cache[c] : boxPixels(c, X0, Y0, Z0, X1, Y1, Z1);
       // A corner outside the image or the lens model's range: where the cell's voxels land
       // is not known, so the camera may give any of them any evidence (a term <= 0).
       if (box.unknown) {
@@ -308,16 +330,16 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
     }
     return boundBelow(all, n_all, some, n_some, p, k, limit_per_view);
   };
-  // Blocks of 2 x 2 x 2 cells first: far from the hand a block is below as a whole (a looser
-  // box, a quarter of the work), the cells of the others one by one.
-  const int bx = (cx_ + 1) / 2, by = (cy_ + 1) / 2, bz = (cz_ + 1) / 2;
+  // Blocks first: far from the hand a block is below as a whole (a looser box, an eighth of
+  // the work), the cells of the others one by one.
 #pragma omp parallel for num_threads(resolveThreads(threads)) schedule(dynamic, 1)
   for (int BZ = 0; BZ < bz; ++BZ)
     for (int BY = 0; BY < by; ++BY)
       for (int BX = 0; BX < bx; ++BX) {
         const int X0 = 2 * BX, Y0 = 2 * BY, Z0 = 2 * BZ;
         const int X1 = std::min(cx_, X0 + 2), Y1 = std::min(cy_, Y0 + 2), Z1 = std::min(cz_, Z0 + 2);
-        if (Z1 * kCell <= first_layer || boxBelow(X0, Y0, Z0, X1, Y1, Z1)) {  // (under the floor: 0)
+        const PixelBox* block_cache = cached ? &block_boxes_[((size_t(BZ) * by + BY) * bx + BX) * cameras_] : nullptr;
+        if (Z1 * kCell <= first_layer || boxBelow(X0, Y0, Z0, X1, Y1, Z1, block_cache)) {  // (under the floor: 0)
           for (int Z = Z0; Z < Z1; ++Z)
             for (int Y = Y0; Y < Y1; ++Y)
               for (int X = X0; X < X1; ++X) below_[(size_t(Z) * cy_ + Y) * cx_ + X] = 1;
@@ -327,7 +349,9 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
           for (int Y = Y0; Y < Y1; ++Y)
             for (int X = X0; X < X1; ++X)
               below_[(size_t(Z) * cy_ + Y) * cx_ + X] =
-                  uint8_t((Z + 1) * kCell <= first_layer || boxBelow(X, Y, Z, X + 1, Y + 1, Z + 1));
+                  uint8_t((Z + 1) * kCell <= first_layer ||
+                          boxBelow(X, Y, Z, X + 1, Y + 1, Z + 1,
+                                   cached ? &cell_boxes_[((size_t(Z) * cy_ + Y) * cx_ + X) * cameras_] : nullptr));
       }
   // The margin: a chunk of a row is skipped when the cells of the voxels within 2 of its voxels
   // along each axis (voxels 8a - 2 .. 8a + 9 of rows y - 2 .. y + 2 in layers z - 2 .. z + 2) are

@@ -110,6 +110,10 @@ class CentreSpaceBound {
   std::vector<tabletop_capture::CameraModel> lens_cameras_;  // what lens_k_ was derived from
   std::vector<TermTiles> tiles_;      // per camera
   std::vector<int> windows_;          // per camera u0, v0, u1, v1
+  // A static grid's boxes ([(cell or block) * cameras + c]), kept while the lattice table's
+  // revision stays boxes_revision_; last_revision_: the revision of the previous frame.
+  std::vector<PixelBox> cell_boxes_, block_boxes_;
+  uint64_t boxes_revision_ = 0, last_revision_ = 0;
   std::vector<uint8_t> below_;        // per cell
   std::vector<uint8_t> x_below_;      // per cell row and chunk: the cells along x the margin reads
 };

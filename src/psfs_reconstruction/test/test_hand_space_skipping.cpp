@@ -79,6 +79,19 @@ double expectHandSkippingRule(const ProbabilityVolume& full, const ProbabilityVo
   return double(changed) / double(full.data.size());
 }
 
+// Fuses with options o and with o skipping below `level`, expects the rule; returns the share skipped.
+double fuseAndExpectTheRule(const ProjectionTable& table, const ViewEvidence& ev, const PsfsOptions& o, double level,
+                            const std::string& what) {
+  PsfsOptions os = o;
+  os.skip_empty_below = level;
+  ProbabilityVolume a, b;
+  PsfsFusion(o).fuse(table, ev, &a);
+  const PsfsFusion skipping(os);
+  skipping.fuse(table, ev, &b);
+  expectHandSkippingRule(a, b, level, what);
+  return skipping.lastSkippedFraction();
+}
+
 // Three frames of 'wave' with short sleeves (gpu_fusion_cases.h), with the known-occlusion
 // patches, and the hands' centres: [0] the classifier-like likelihoods with noise and 2 %
 // outliers (a bright pixel under nearly every cell of every view: little to skip), [1] the same
@@ -184,6 +197,26 @@ TEST(HandSpaceSkipping, EveryKernelThreadCountAndStorageGivesTheSameBytes) {
   detail::forceRowKernelForTest(0);
 }
 
+// A grid that stays (the workspace's, or a hand that holds still) keeps its cells' boxes from
+// the second frame on: the same bytes as a fusion that derives them afresh, frame after frame
+// and on new evidence.
+TEST(HandSpaceSkipping, AGridThatStaysKeepsItsBoxes) {
+  const HandFrames& h = handFrames();
+  const ProjectionTable table = handTable(h.scenes[1][0], h.scenes[1][0].right_hand, TableStorage::kPrecomputed);
+  PsfsOptions o;
+  o.skip_empty_below = 0.5;
+  const PsfsFusion kept(o);
+  for (int frame = 0; frame < 4; ++frame) {
+    ViewEvidence ev;
+    ev.set(h.scenes[1][size_t(frame % 3)].views(1), false);
+    ProbabilityVolume a, b;
+    kept.fuse(table, ev, &a);
+    PsfsFusion(o).fuse(table, ev, &b);  // a fresh fusion: boxes on demand
+    EXPECT_EQ(a.data, b.data) << "frame " << frame;
+    EXPECT_GT(kept.lastSkippedFraction(), 0.3) << "frame " << frame;
+  }
+}
+
 // A cube half outside the views (at the workspace's corner, beyond some cameras' images), and
 // one view switched off as a whole: the cells those cameras see in part or not at all.
 TEST(HandSpaceSkipping, CubesLeavingTheViewsAndAViewSwitchedOff) {
@@ -194,15 +227,8 @@ TEST(HandSpaceSkipping, CubesLeavingTheViewsAndAViewSwitchedOff) {
       if (off >= 0) views[size_t(off)].active = cv::Mat::zeros(views[size_t(off)].likelihood.size(), CV_8UC1);
       ViewEvidence ev;
       ev.set(views, false);
-      const ProjectionTable table = handTable(s, centre, TableStorage::kOnTheFly);
-      PsfsOptions o;
-      PsfsOptions os = o;
-      os.skip_empty_below = 0.5;
-      ProbabilityVolume a, b;
-      PsfsFusion(o).fuse(table, ev, &a);
-      const PsfsFusion skipping(os);
-      skipping.fuse(table, ev, &b);
-      expectHandSkippingRule(a, b, 0.5, "view off " + std::to_string(off));
+      fuseAndExpectTheRule(handTable(s, centre, TableStorage::kOnTheFly), ev, PsfsOptions(), 0.5,
+                           "view off " + std::to_string(off));
     }
 }
 
@@ -258,14 +284,8 @@ TEST(HandSpaceSkipping, OtherFusionParametersKeepTheRule) {
     if (variant == 1) o.occluded_views = 2;
     if (variant == 2) o.occluded_views = 1, o.drop_threshold = 0.3;
     if (variant == 3) o.hull_prior = 0.005, o.view_prior = skinViewPrior(0.005, 0.08, int(s.cameras.size()));
-    PsfsOptions os = o;
-    os.skip_empty_below = 0.5;
-    ProbabilityVolume a, b;
-    PsfsFusion(o).fuse(table, ev, &a);
-    const PsfsFusion skipping(os);
-    skipping.fuse(table, ev, &b);
-    expectHandSkippingRule(a, b, 0.5, "variant " + std::to_string(variant));
-    std::printf("[ figures  ] variant %d: %.0f %% of the voxels skipped\n", variant, 100.0 * skipping.lastSkippedFraction());
+    const double skipped = fuseAndExpectTheRule(table, ev, o, 0.5, "variant " + std::to_string(variant));
+    std::printf("[ figures  ] variant %d: %.0f %% of the voxels skipped\n", variant, 100.0 * skipped);
   }
 }
 
