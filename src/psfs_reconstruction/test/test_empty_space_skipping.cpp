@@ -13,6 +13,7 @@
 #include "../src/psfs_kernels.h"
 #include "expect_throw.h"
 #include "gpu_fusion_cases.h"
+#include "pipeline_frames.h"
 #include "fusion_test_utils.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/reconstructor.h"
@@ -307,21 +308,11 @@ TEST(EmptySpaceSkipping, PipelineVolumesKeepEveryVoxelAboveTheLevel) {
   const double level = 0.5;
   std::vector<FrameResult> results[2];
   for (int skip : {0, 1}) {
-    sim::SimOptions so;
-    so.script = "wave";
-    so.empty_frames = 25;
-    sim::SimulatedRig rig(so);
     ReconstructorParams params;
     params.threads = 2;
     params.body.skip_empty_below = params.skin.skip_empty_below = skip ? level : 0.0;  // the default skips
-    Reconstructor r(GaussianMixture2D::load(psfs_test::configDir() + "/skin_gmm.yaml"), params);
-    for (int f = 0; f < 25; ++f) r.process(rig.render(f).images, rig.rig().cameras);
-    ASSERT_TRUE(r.backgroundReady());
-    const int n = rig.scriptFrames();
-    for (int f : {25 + 5, 25 + (n - 25) / 3, 25 + 2 * (n - 25) / 3, n - 3}) {
-      results[skip].push_back(r.process(rig.render(f).images, rig.rig().cameras));
-      ASSERT_EQ(results[skip].back().status, FrameResult::Status::kReconstructed);
-    }
+    results[skip] = psfs_test::pipelineFrames(params, false);
+    ASSERT_EQ(results[skip].size(), 4u);
   }
   // The Reconstructor's evidence is its own: here the rule's weaker half, voxel by voxel.
   const int level_byte = int(level * 255.0 + 0.5);

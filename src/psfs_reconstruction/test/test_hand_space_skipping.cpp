@@ -23,6 +23,7 @@
 #include "expect_throw.h"
 #include "fusion_test_utils.h"
 #include "gpu_fusion_cases.h"
+#include "pipeline_frames.h"
 #include "psfs_reconstruction/psfs_fusion.h"
 #include "psfs_reconstruction/reconstructor.h"
 #include "psfs_reconstruction/simd_dispatch.h"
@@ -237,23 +238,11 @@ TEST(HandSpaceSkipping, CubesLeavingTheViewsAndAViewSwitchedOff) {
 TEST(HandSpaceSkipping, PipelineHandVolumesKeepTheirSurface) {
   std::vector<FrameResult> results[2];
   for (int skip : {0, 1}) {
-    sim::SimOptions so;
-    so.script = "wave";
-    so.empty_frames = 25;
-    sim::SimulatedRig rig(so);
     ReconstructorParams params;
     params.threads = 2;
     if (!skip) params.hand.skip_empty_below = 0.0;  // the default skips
-    Reconstructor r(GaussianMixture2D::load(psfs_test::configDir() + "/skin_gmm.yaml"), params);
-    for (int f = 0; f < 25; ++f) r.process(rig.render(f).images, rig.rig().cameras);
-    ASSERT_TRUE(r.backgroundReady());
-    const int n = rig.scriptFrames();
-    for (int f : {25 + 5, 25 + (n - 25) / 3, 25 + 2 * (n - 25) / 3, n - 3}) {
-      const sim::SimFrame frame = rig.render(f);
-      results[skip].push_back(r.process(frame.images, rig.rig().cameras, {frame.truth.left_hand, frame.truth.right_hand}));
-      ASSERT_EQ(results[skip].back().status, FrameResult::Status::kReconstructed);
-      ASSERT_EQ(results[skip].back().hands.size(), 2u);
-    }
+    results[skip] = psfs_test::pipelineFrames(params, true);
+    ASSERT_EQ(results[skip].size(), 4u);
   }
   const double level = ReconstructorParams::defaultHand().skip_empty_below;
   ASSERT_GT(level, 0.0);
