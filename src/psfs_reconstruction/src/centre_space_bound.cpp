@@ -313,11 +313,19 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
       }
       const int w = table.camera(c).width, h = table.camera(c).height;
       const int ru0 = box.u0, ru1 = box.u1, rv0 = box.v0, rv1 = box.v1;
+      if (ru1 < 0 || ru0 > w - 1 || rv1 < 0 || rv0 > h - 1) continue;  // no voxel in the image
       const bool inside = ru0 >= 0 && ru1 <= w - 1 && rv0 >= 0 && rv1 <= h - 1;
+      const int cu0 = std::max(ru0, 0), cv0 = std::max(rv0, 0), cu1 = std::min(ru1, w - 1), cv1 = std::min(rv1, h - 1);
+      // A box wider than the camera's window (its slack above the window's; not seen on the
+      // rigs measured) has no tiles there: the camera may give any term.
+      const int* win = &windows_[size_t(c) * 4];
+      if (cu0 < win[0] || cv0 < win[1] || cu1 > win[2] || cv1 > win[3]) {
+        some[n_some++] = 0;
+        continue;
+      }
       int m;
       bool off;
-      tiles_[size_t(c)].rectMax(std::max(ru0, 0), std::max(rv0, 0), std::min(ru1, w - 1), std::min(rv1, h - 1), &m,
-                                &off);
+      tiles_[size_t(c)].rectMax(cu0, cv0, cu1, cv1, &m, &off);
       if (m < 0) continue;  // no pixel there gives evidence
       const int32_t b = terms[m];
       if (inside && !off) {

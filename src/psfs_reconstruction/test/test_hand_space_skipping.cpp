@@ -222,15 +222,23 @@ TEST(HandSpaceSkipping, AGridThatStaysKeepsItsBoxes) {
 // one view switched off as a whole: the cells those cameras see in part or not at all.
 TEST(HandSpaceSkipping, CubesLeavingTheViewsAndAViewSwitchedOff) {
   const gpu_test::SimScene& s = handFrames().scenes[1][1];
-  for (int off : {-1, 3})
-    for (const Eigen::Vector3d& centre : {Eigen::Vector3d(-0.55, -0.55, 0.05), Eigen::Vector3d(0.6, 0.1, 0.6)}) {
-      std::vector<ViewImage> views = s.views(1);
-      if (off >= 0) views[size_t(off)].active = cv::Mat::zeros(views[size_t(off)].likelihood.size(), CV_8UC1);
-      ViewEvidence ev;
-      ev.set(views, false);
-      fuseAndExpectTheRule(handTable(s, centre, TableStorage::kOnTheFly), ev, PsfsOptions(), 0.5,
-                           "view off " + std::to_string(off));
-    }
+  // Camera 1 zoomed in 5x: most cubes lie wholly or partly outside its image.
+  std::vector<tabletop_capture::CameraModel> zoomed = s.cameras;
+  zoomed[1].fx *= 5.0, zoomed[1].fy *= 5.0;
+  for (int zoom : {0, 1})
+    for (int off : {-1, 3})
+      for (const Eigen::Vector3d& centre :
+           {Eigen::Vector3d(-0.55, -0.55, 0.05), Eigen::Vector3d(0.6, 0.1, 0.6), s.right_hand}) {
+        std::vector<ViewImage> views = s.views(1);
+        if (off >= 0) views[size_t(off)].active = cv::Mat::zeros(views[size_t(off)].likelihood.size(), CV_8UC1);
+        ViewEvidence ev;
+        ev.set(views, false);
+        ProjectionTableOptions o;
+        o.storage = TableStorage::kOnTheFly;
+        const ProjectionTable table(snappedCubeGrid(centre, 0.30, 83), zoom ? zoomed : s.cameras, o);
+        fuseAndExpectTheRule(table, ev, PsfsOptions(), 0.5,
+                             "zoom " + std::to_string(zoom) + " view off " + std::to_string(off));
+      }
 }
 
 // The real pipeline (classifier, background learned from 25 sets, known occlusions), 4 frames
