@@ -30,21 +30,32 @@ inline int pixelLow(int a16, int slack) {
 }
 inline int pixelHigh(int b16, int slack) { return (b16 + slack) >> 4; }
 
-// An upper bound of the second derivative of the camera's distortion (normalised coordinates,
-// the norm of D''[d, d] over unit directions d) over the image: second differences on a grid
-// of points over the image's normalised extent (within the lens model's valid radius), along
-// the axes and diagonals, doubled for the points and directions between the samples. 0
-// without distortion. With it, the image of a box whose corners' images span a diameter L
-// (normalised) lies within C2 L^2 / 2 of their hull (Taylor: q = sum l_i q_i, D(q_i) = D(q) +
-// J (q_i - q) + R_i, |R_i| <= C2 |q_i - q|^2 / 2).
-double distortionCurvature(const tabletop_capture::CameraModel& m, float r2_max) {
-  if (!m.hasDistortion()) return 0.0;
-  const double xs = 1.3 * std::max(m.cx, m.width - m.cx) / m.fx, ys = 1.3 * std::max(m.cy, m.height - m.cy) / m.fy;
+// The distortion's shape over the image's normalised extent (the image corners undistorted,
+// times 1.2, within the lens model's valid radius), from second and first differences on a grid
+// of points along the axes and diagonals: c2, an upper bound of |D''[d, d]| over unit directions d
+// (doubled for the points and directions between the samples), and s_min, a lower bound of the
+// smallest singular value of the Jacobian (halved likewise): a box whose corners' images span a
+// diameter L_d spans at most L_d / s_min before the lens, and its image lies within
+// c2 (L_d / s_min)^2 / 2 of their hull (Taylor: q = sum l_i q_i, D(q_i) = D(q) + J (q_i - q) + R_i,
+// |R_i| <= c2 |q_i - q|^2 / 2). No distortion: c2 = 0.
+struct LensShape {
+  double c2 = 0.0, s_min = 1.0;
+};
+LensShape lensShape(const tabletop_capture::CameraModel& m, float r2_max) {
+  LensShape shape;
+  if (!m.hasDistortion()) return shape;
+  double xs = 0.0, ys = 0.0;
+  for (double u : {0.0, double(m.width)})
+    for (double v : {0.0, double(m.height)}) {
+      const Eigen::Vector2d q = m.undistort(Eigen::Vector2d((u - m.cx) / m.fx, (v - m.cy) / m.fy));
+      xs = std::max(xs, std::abs(q.x())), ys = std::max(ys, std::abs(q.y()));
+    }
+  xs *= 1.2, ys *= 1.2;
   const double r2 = std::isfinite(r2_max) ? double(r2_max) : std::numeric_limits<double>::infinity();
-  constexpr int kSamples = 16;
+  constexpr int kSamples = 24;
   constexpr double h = 1e-3;
   const Eigen::Vector2d dirs[4] = {{1, 0}, {0, 1}, {M_SQRT1_2, M_SQRT1_2}, {M_SQRT1_2, -M_SQRT1_2}};
-  double c2 = 0.0;
+  double c2 = 0.0, s_min = std::numeric_limits<double>::infinity();
   for (int j = 0; j <= kSamples; ++j)
     for (int i = 0; i <= kSamples; ++i) {
       const Eigen::Vector2d q(xs * (2.0 * i / kSamples - 1.0), ys * (2.0 * j / kSamples - 1.0));
@@ -52,8 +63,16 @@ double distortionCurvature(const tabletop_capture::CameraModel& m, float r2_max)
       const Eigen::Vector2d d0 = m.distort(q);
       for (const Eigen::Vector2d& d : dirs)
         c2 = std::max(c2, (m.distort(q + h * d) - 2.0 * d0 + m.distort(q - h * d)).norm() / (h * h));
+      Eigen::Matrix2d jac;
+      jac.col(0) = (m.distort(q + Eigen::Vector2d(h, 0)) - m.distort(q - Eigen::Vector2d(h, 0))) / (2 * h);
+      jac.col(1) = (m.distort(q + Eigen::Vector2d(0, h)) - m.distort(q - Eigen::Vector2d(0, h))) / (2 * h);
+      // The smallest singular value of a 2x2 matrix.
+      const double a = jac.squaredNorm(), det = std::abs(jac.determinant());
+      s_min = std::min(s_min, std::sqrt(std::max(0.0, 0.5 * (a - std::sqrt(std::max(0.0, a * a - 4.0 * det * det))))));
     }
-  return 2.0 * c2;
+  shape.c2 = 2.0 * c2;
+  shape.s_min = std::isfinite(s_min) ? std::max(1e-3, 0.5 * s_min) : 1e-3;
+  return shape;
 }
 
 }  // namespace
@@ -80,8 +99,8 @@ CentreSpaceBound::PixelBox CentreSpaceBound::boxPixels(int c, int X0, int Y0, in
 }
 
 int CentreSpaceBound::lensSlack16(int c, int du16, int dv16) const {
-  // C2 L^2 / 2 in pixels (times f), L^2 from the distorted extent in 1/16 px: (du^2 + dv^2) / (16 f)^2,
-  // times 2.25 for distorted against undistorted extent (a factor of 1.5 in the radial scale).
+  // c2 L^2 / 2 in pixels (times f), L^2 before the lens from the distorted extent in 1/16 px:
+  // (du^2 + dv^2) / (16 f s_min)^2 (lensShape).
   const double slack = lens_k_[size_t(c)] * (double(du16) * du16 + double(dv16) * dv16);
   return slack > 1e6 ? 1000000 : int(std::ceil(slack));
 }
@@ -202,9 +221,9 @@ void CentreSpaceBound::projectLattice(const ProjectionTable& table, int threads)
     for (size_t c = 0; c < cameras.size(); ++c) {
       const auto& m = cameras[c];
       const double f_min = std::min(m.fx, m.fy), f_max = std::max(m.fx, m.fy);
-      // 16 (1/16 px) * f_max * C2 * 2.25 / (2 (16 f_min)^2) per (1/16 px)^2 of extent.
-      lens_k_[c] = 16.0 * f_max * distortionCurvature(m, table.projectionCamera(int(c)).r2_max) * 2.25 /
-                   (2.0 * 256.0 * f_min * f_min);
+      // 16 (1/16 px) * f_max * c2 / (2 (16 f_min s_min)^2) per (1/16 px)^2 of extent.
+      const LensShape shape = lensShape(m, table.projectionCamera(int(c)).r2_max);
+      lens_k_[c] = 16.0 * f_max * shape.c2 / (2.0 * 256.0 * f_min * f_min * shape.s_min * shape.s_min);
     }
     lens_cameras_ = cameras;
   }
@@ -417,6 +436,10 @@ double CentreSpaceBound::skippableChunks(const ProjectionTable& table, const Vie
   if (evidence.numViews() != table.numCameras())
     throw std::invalid_argument("psfs::CentreSpaceBound: evidence for " + std::to_string(evidence.numViews()) +
                                 " cameras, table has " + std::to_string(table.numCameras()));
+  for (int c = 0; c < table.numCameras(); ++c)
+    if (evidence.width(c) != table.camera(c).width || evidence.height(c) != table.camera(c).height)
+      throw std::invalid_argument("psfs::CentreSpaceBound: evidence view " + std::to_string(c) +
+                                  " is not of its camera's size");
   return flagChunks(
       table,
       [&](int c, TermTiles* t, int u0, int v0, int u1, int v1) {

@@ -1,8 +1,8 @@
 // Empty-space skipping in the single-projection pSfS (PsfsOptions::skip_empty_below without
 // multi_projection: the hand sub-volumes, src/centre_space_bound.h). The bound is strict and
-// keeps a margin of one cell, so on the simulated rig's frames (synthetic classifier-like
+// keeps a margin of two voxels, so on the simulated rig's frames (synthetic classifier-like
 // likelihoods with known occlusions, and the real pipeline) every voxel at or above the level,
-// and every voxel next to one (what marching cubes at iso >= the level reads), is the full
+// and every voxel within 2 of one (what marching cubes above the level reads), is the full
 // fusion's byte; every other voxel is that byte or 0. Every row kernel, thread count, table
 // storage, a floor, occlusion tolerance, cubes that leave some views and a view switched off.
 // The figures printed are the skipped share of the cubes' voxels.
@@ -203,11 +203,15 @@ TEST(HandSpaceSkipping, EveryKernelThreadCountAndStorageGivesTheSameBytes) {
 // and on new evidence.
 TEST(HandSpaceSkipping, AGridThatStaysKeepsItsBoxes) {
   const HandFrames& h = handFrames();
-  const ProjectionTable table = handTable(h.scenes[1][0], h.scenes[1][0].right_hand, TableStorage::kPrecomputed);
+  const ProjectionTable tables[2] = {
+      handTable(h.scenes[1][0], h.scenes[1][0].right_hand, TableStorage::kPrecomputed),
+      handTable(h.scenes[1][0], h.scenes[1][0].left_hand, TableStorage::kOnTheFly)};
   PsfsOptions o;
   o.skip_empty_below = 0.5;
   const PsfsFusion kept(o);
-  for (int frame = 0; frame < 4; ++frame) {
+  // Table A three times (boxes kept from the second), B once (a moving cube), A twice again.
+  for (int frame = 0; frame < 6; ++frame) {
+    const ProjectionTable& table = tables[frame == 3 ? 1 : 0];
     ViewEvidence ev;
     ev.set(h.scenes[1][size_t(frame % 3)].views(1), false);
     ProbabilityVolume a, b;
