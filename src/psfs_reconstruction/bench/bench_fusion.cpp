@@ -292,6 +292,7 @@ struct PipelineFrame {
   std::vector<tabletop_capture::CameraModel> cameras;
   std::vector<ViewImage> views[2];
   ViewEvidence evidence[2], single, single_skin;
+  Eigen::Vector3d hands[2];  // the true hands (left, right)
   PipelineFrame() {
     tabletop_sim::SimOptions so;
     so.script = "wave";
@@ -301,7 +302,9 @@ struct PipelineFrame {
     ReconstructorParams params;
     Reconstructor r(GaussianMixture2D::load(PSFS_BENCH_CONFIG_DIR "/skin_gmm.yaml"), params);
     for (int f = 0; f < 25; ++f) r.process(rig.render(f).images, cameras);
-    r.process(rig.render(60).images, cameras);
+    const tabletop_sim::SimFrame frame = rig.render(60);
+    hands[0] = frame.truth.left_hand, hands[1] = frame.truth.right_hand;
+    r.process(frame.images, cameras);
     for (int k = 0; k < 2; ++k) {
       for (const cv::Mat& l : r.lastLikelihoods()) views[k].push_back(ViewImage{l.clone(), k, cv::Mat()});
       evidence[k].set(views[k], true);
@@ -490,6 +493,52 @@ void BM_HandSubVolumesFootprint(benchmark::State& st) {
   st.SetLabel(std::string("2 x 83^3, projected on the fly, footprint levels") + (with_evidence ? " + evidence" : ""));
 }
 BENCHMARK(BM_HandSubVolumesFootprint)->ArgsProduct({{1, 2}, {0, 1}})->ArgNames({"threads", "evidence"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// The two hand cubes on the real classifier's skin likelihoods of the default scenario's frame
+// 60 (at the true hands, moved a few mm per iteration, the desk top as their floor as the
+// Reconstructor has it; fusion only, no known occlusions): single projection with skipping below
+// range(1) percent (0 = off), range(0) threads; range(2) = 1: binary SfS on the same silhouettes
+// and tables instead (the same-frame baseline).
+void BM_HandsPipelineFrame(benchmark::State& st) {
+  PipelineFrame& w = pipelineFrame();
+  const int threads = static_cast<int>(st.range(0));
+  const bool binary = st.range(2) != 0;
+  PsfsOptions o = ReconstructorParams::defaultHand();
+  o.skip_empty_below = double(st.range(1)) / 100.0;
+  o.threads = threads;
+  o.floor_z = ReconstructorParams().workspace.min_corner.z();
+  const PsfsFusion fusion(o);
+  BinarySfsOptions bo;
+  bo.threads = threads;
+  BinarySfs bin(bo);
+  bin.setSilhouettes(w.single_skin);
+  ProjectionTableOptions to;
+  to.storage = TableStorage::kOnTheFly;
+  ProjectionTable tables[2] = {ProjectionTable(snappedCubeGrid(w.hands[0], 0.3, 83), w.cameras, to),
+                               ProjectionTable(snappedCubeGrid(w.hands[1], 0.3, 83), w.cameras, to)};
+  ProbabilityVolume out[2];
+  int frame = 0;
+  double skipped = 0;
+  for (auto _ : st) {
+    const Eigen::Vector3d step(0.003 * (frame % 5), 0.002 * (frame % 3), 0.0);
+    for (int h = 0; h < 2; ++h) {
+      tables[h].update(snappedCubeGrid(w.hands[h] + step, 0.3, 83), w.cameras);
+      if (binary) {
+        bin.carve(tables[h], &out[h]);
+      } else {
+        fusion.fuse(tables[h], w.single_skin, &out[h]);
+        skipped += fusion.lastSkippedFraction() / 2.0;
+      }
+    }
+    ++frame;
+    benchmark::DoNotOptimize(out[1].data.data());
+  }
+  st.counters["voxels_skipped"] = skipped / std::max(frame, 1);
+  st.SetLabel(std::string(binary ? "binary SfS" : "pSfS") + ", 2 x 83^3 at the hands of the default scenario's frame 60");
+}
+BENCHMARK(BM_HandsPipelineFrame)
+    ->Args({1, 0, 0})->Args({1, 50, 0})->Args({1, 0, 1})->Args({2, 0, 0})->Args({2, 50, 0})->Args({2, 0, 1})
+    ->ArgNames({"threads", "below_pct", "binary"})->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_HandSubVolumesBinary(benchmark::State& st) {
   Workload& w = workload();
