@@ -77,24 +77,30 @@ LensShape lensShape(const tabletop_capture::CameraModel& m, float r2_max) {
 
 }  // namespace
 
-CentreSpaceBound::PixelBox CentreSpaceBound::boxPixels(int c, int X0, int Y0, int Z0, int X1, int Y1, int Z1) const {
-  const ProjectionTable& lt = *lattice_table_;
-  const uint32_t none = PackedUV::notObserved(lt.camera(c).height);
-  const uint32_t* packed = lt.rowCentres(0, nullptr);  // stored: [row][camera][x]
-  const size_t row_stride = size_t(cameras_) * lt.paddedRowLength(), py = size_t(cy_) + 1;
-  PixelBox b;
-  int u0 = std::numeric_limits<int>::max(), u1 = -1, v0 = u0, v1 = -1;
+CentreSpaceBound::CornerSpan CentreSpaceBound::cornerSpan(int c, int X0, int Y0, int Z0, int X1, int Y1,
+                                                          int Z1) const {
+  const uint32_t none = PackedUV::notObserved(lattice_table_->camera(c).height);
+  CornerSpan s;
   for (int i = 0; i < 8; ++i) {
-    const size_t row = size_t(i & 2 ? Y1 : Y0) + py * size_t(i & 4 ? Z1 : Z0);
-    const uint32_t q = packed[row * row_stride + size_t(c) * lt.paddedRowLength() + size_t(i & 1 ? X1 : X0)];
-    b.unknown = b.unknown || q == none;
+    const uint32_t q = corner(c, i & 1 ? X1 : X0, i & 2 ? Y1 : Y0, i & 4 ? Z1 : Z0);
+    if (q == none) {
+      s.unknown = true;
+      continue;
+    }
     const int u = int(q & 0xFFFFu), v = int(q >> 16);
-    u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    s.u0 = std::min(s.u0, u), s.u1 = std::max(s.u1, u), s.v0 = std::min(s.v0, v), s.v1 = std::max(s.v1, v);
   }
+  return s;
+}
+
+CentreSpaceBound::PixelBox CentreSpaceBound::boxPixels(int c, int X0, int Y0, int Z0, int X1, int Y1, int Z1) const {
+  const CornerSpan s = cornerSpan(c, X0, Y0, Z0, X1, Y1, Z1);
+  PixelBox b;
+  b.unknown = s.unknown;
   if (b.unknown) return b;
-  const int slack = kSlack16 + (lens_k_[size_t(c)] > 0.0 ? lensSlack16(c, u1 - u0, v1 - v0) : 0);
-  b.u0 = pixelLow(u0, slack), b.u1 = pixelHigh(u1, slack);
-  b.v0 = pixelLow(v0, slack), b.v1 = pixelHigh(v1, slack);
+  const int slack = kSlack16 + (lens_k_[size_t(c)] > 0.0 ? lensSlack16(c, s.u1 - s.u0, s.v1 - s.v0) : 0);
+  b.u0 = pixelLow(s.u0, slack), b.u1 = pixelHigh(s.u1, slack);
+  b.v0 = pixelLow(s.v0, slack), b.v1 = pixelHigh(s.v1, slack);
   return b;
 }
 
@@ -235,6 +241,8 @@ void CentreSpaceBound::projectLattice(const ProjectionTable& table, int threads)
   } else {
     lattice_table_->update(lattice, cameras);
   }
+  lattice_packed_ = lattice_table_->rowCentres(0, nullptr);
+  lattice_nxp_ = lattice_table_->paddedRowLength();
 }
 
 template <class SetTiles>
@@ -242,11 +250,7 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
                                     int k, double max_probability, int threads, std::vector<uint8_t>* flags) {
   const int32_t limit_per_view = boundLimitPerView(p, max_probability);
   projectLattice(table, threads);
-  const ProjectionTable& lt = *lattice_table_;
-  const int px = cx_ + 1, py = cy_ + 1, pz = cz_ + 1, lnxp = lt.paddedRowLength();
-  const uint32_t* packed = lt.rowCentres(0, nullptr);  // stored: [row][camera][x]
-  const size_t row_stride = size_t(cameras_) * lnxp;
-  auto corner = [&](int X, int Y, int Z, int c) { return packed[(size_t(Y) + size_t(py) * Z) * row_stride + size_t(c) * lnxp + X]; };
+  const int px = cx_ + 1, py = cy_ + 1, pz = cz_ + 1;
   // Each camera's window: the pixels the projected corners can round to.
   windows_.assign(size_t(cameras_) * 4, 0);
   tiles_.resize(size_t(cameras_));
@@ -257,7 +261,7 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
     for (int Z = 0; Z < pz; ++Z)
       for (int Y = 0; Y < py; ++Y)
         for (int X = 0; X < px; ++X) {
-          const uint32_t q = corner(X, Y, Z, c);
+          const uint32_t q = corner(c, X, Y, Z);
           if (q == none) continue;
           const int u = int(q & 0xFFFFu), v = int(q >> 16);
           u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
@@ -268,15 +272,8 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
       for (int Z = 0; Z < cz_; Z += 2)
         for (int Y = 0; Y < cy_; Y += 2)
           for (int X = 0; X < cx_; X += 2) {
-            int a0 = std::numeric_limits<int>::max(), a1 = -1, b0 = a0, b1 = -1;
-            for (int i = 0; i < 8; ++i) {
-              const uint32_t q = corner(std::min(cx_, X + 2 * (i & 1)), std::min(cy_, Y + (i & 2)),
-                                        std::min(cz_, Z + ((i >> 1) & 2)), c);
-              if (q == none) continue;
-              a0 = std::min(a0, int(q & 0xFFFFu)), a1 = std::max(a1, int(q & 0xFFFFu));
-              b0 = std::min(b0, int(q >> 16)), b1 = std::max(b1, int(q >> 16));
-            }
-            if (a1 >= 0) slack = std::max(slack, kSlack16 + lensSlack16(c, a1 - a0, b1 - b0));
+            const CornerSpan b = cornerSpan(c, X, Y, Z, std::min(cx_, X + 2), std::min(cy_, Y + 2), std::min(cz_, Z + 2));
+            if (b.u1 >= 0) slack = std::max(slack, kSlack16 + lensSlack16(c, b.u1 - b.u0, b.v1 - b.v0));
           }
     const int w = table.camera(c).width, h = table.camera(c).height;
     int* win = &windows_[size_t(c) * 4];

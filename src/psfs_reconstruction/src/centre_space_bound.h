@@ -96,6 +96,18 @@ class CentreSpaceBound {
   PixelBox boxPixels(int c, int X0, int Y0, int Z0, int X1, int Y1, int Z1) const;
 
  private:
+  // The lattice table's packed corner (X, Y, Z) of camera c, and over the 8 corners of the box of
+  // cells [X0, X1] x ... (lattice indices): their span in PackedUV units (u1 < 0: none known),
+  // unknown where one is not observed.
+  struct CornerSpan {
+    int u0 = 1 << 30, v0 = 1 << 30, u1 = -1, v1 = -1;
+    bool unknown = false;
+  };
+  uint32_t corner(int c, int X, int Y, int Z) const {
+    const size_t row = size_t(Y) + (size_t(cy_) + 1) * size_t(Z);
+    return lattice_packed_[(row * size_t(cameras_) + size_t(c)) * size_t(lattice_nxp_) + size_t(X)];
+  }
+  CornerSpan cornerSpan(int c, int X0, int Y0, int Z0, int X1, int Y1, int Z1) const;
   // Per lattice point (the corners of the cells' face boxes) and camera: its image position.
   void projectLattice(const ProjectionTable& table, int threads);
   template <class SetTiles>
@@ -104,6 +116,8 @@ class CentreSpaceBound {
 
   int nx_ = 0, ny_ = 0, nz_ = 0, cx_ = 0, cy_ = 0, cz_ = 0, cameras_ = 0;
   std::unique_ptr<ProjectionTable> lattice_table_;  // the cells' corners (projectLattice)
+  const uint32_t* lattice_packed_ = nullptr;        // its stored entries: [row][camera][x]
+  int lattice_nxp_ = 0;                             // its padded row length
   // The lens slack (1/16 px) of a box whose corners' images span du16 x dv16 (1/16 px) in camera c.
   int lensSlack16(int c, int du16, int dv16) const;
   std::vector<double> lens_k_;  // per camera: lensSlack16's factor (0: no distortion)
