@@ -11,6 +11,10 @@
 #include "cpu_dispatch.h"
 #include "volume_fusion.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace psfs {
 namespace detail {
 namespace {
@@ -42,7 +46,8 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
   const size_t nt = size_t(tiles_x) * tiles_y;
   for (auto& b : bound) b.assign(nt, 0);
   row_min_.resize(size_t(width));
-  col_max_.resize(size_t(width));
+  // Whole tiles and a vector past the last (zeros: no byte is below 0) for the tiles' maxima.
+  col_max_.resize(size_t(tiles_x) * kTile + 16);
   size_t off_tiles = 0;
   // Every 4th row is plenty for the commonest byte (the background covers most of a view).
   // Four histograms, a pixel's by u % 4: most pixels hold the same byte, and one counter would
@@ -85,12 +90,24 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
         for (int u = 0; u < width; ++u) off[size_t(u / kTile)] |= tr[u] > 0;
       }
     }
-    for (int tx = 0; tx < tiles_x; ++tx) {
-      uint8_t m = 0;
-      for (int u = tx * kTile; u < std::min(width, (tx + 1) * kTile); ++u) m = std::max(m, col_max_[size_t(u)]);
-      bound[0][size_t(ty) * tiles_x + tx] = off[size_t(tx)] ? kInactive : term[m];
-      off_tiles += off[size_t(tx)];
+    int32_t* b0 = &bound[0][size_t(ty) * tiles_x];
+    int tx = 0;
+#if defined(__SSE2__)
+    // Two tiles per vector: the largest byte of each 8-byte half ends in its low byte.
+    for (; tx + 2 <= tiles_x; tx += 2) {
+      __m128i m = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&col_max_[size_t(tx) * kTile]));
+      m = _mm_max_epu8(m, _mm_srli_epi64(m, 32));
+      m = _mm_max_epu8(m, _mm_srli_epi64(m, 16));
+      m = _mm_max_epu8(m, _mm_srli_epi64(m, 8));
+      b0[tx] = off[size_t(tx)] ? kInactive : term[size_t(_mm_cvtsi128_si32(m) & 0xFF)];
+      b0[tx + 1] = off[size_t(tx) + 1] ? kInactive : term[size_t(_mm_extract_epi16(m, 4) & 0xFF)];
     }
+#endif
+    for (; tx < tiles_x; ++tx) {
+      const uint8_t* c = &col_max_[size_t(tx) * kTile];
+      b0[tx] = off[size_t(tx)] ? kInactive : term[*std::max_element(c, c + kTile)];
+    }
+    for (int t = 0; t < tiles_x; ++t) off_tiles += off[size_t(t)];
   }
   // A view switched off as a whole (a dark or missing camera) observes nothing.
   absent = false;
@@ -103,15 +120,17 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
   }
   for (int l = 1; l < kLevels; ++l) {
     const int h = 1 << (l - 1);  // the squares of level l - 1 that make one of level l
-    const std::vector<int32_t>& src = bound[l - 1];
-    std::vector<int32_t>& dst = bound[l];
-    for (int ty = 0; ty < tiles_y; ++ty)
+    for (int ty = 0; ty < tiles_y; ++ty) {
+      const int32_t* __restrict s0 = &bound[l - 1][size_t(ty) * tiles_x];
+      const int32_t* __restrict s1 = &bound[l - 1][size_t(std::min(ty + h, tiles_y - 1)) * tiles_x];
+      int32_t* __restrict d = &bound[l][size_t(ty) * tiles_x];
       for (int tx = 0; tx < tiles_x; ++tx) {
-        const int tx2 = std::min(tx + h, tiles_x - 1), ty2 = std::min(ty + h, tiles_y - 1);
-        dst[size_t(ty) * tiles_x + tx] =
-            std::max(std::max(src[size_t(ty) * tiles_x + tx], src[size_t(ty) * tiles_x + tx2]),
-                     std::max(src[size_t(ty2) * tiles_x + tx], src[size_t(ty2) * tiles_x + tx2]));
+        const int tx2 = std::min(tx + h, tiles_x - 1);
+        const int32_t a = s0[tx] > s0[tx2] ? s0[tx] : s0[tx2];
+        const int32_t b = s1[tx] > s1[tx2] ? s1[tx] : s1[tx2];
+        d[tx] = a > b ? a : b;
       }
+    }
   }
 }
 
@@ -163,7 +182,7 @@ double skippedChunks(const PsfsOptions& o, const ProjectionTable& table, EmptySk
                      std::vector<uint8_t>* flags) {
   cache->bound.prepare(table);
   const PsfsRowParams p = psfsRowParams(o, table);
-  cache->bound.skippableChunks(cache->tiles, p, o.occluded_views, o.skip_empty_below, flags);
+  cache->bound.skippableChunks(cache->tiles, p, o.occluded_views, o.skip_empty_below, o.threads, flags);
   const size_t chunks = size_t(p.chunks), rows = size_t(table.grid().numRows());
   const size_t floor_rows = std::min(rows, size_t(p.first_layer) * size_t(table.grid().dims.y()));
   std::fill(flags->begin(), flags->begin() + floor_rows * chunks, uint8_t(0));
@@ -371,32 +390,38 @@ void EmptySpaceBound::fillChunks(size_t row, const uint8_t* flags, uint8_t fill,
 }
 
 size_t EmptySpaceBound::skippableChunks(const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p, int k,
-                                        double max_probability, std::vector<uint8_t>* flags) const {
+                                        double max_probability, int threads, std::vector<uint8_t>* flags) const {
   if (int(tiles.size()) != cameras_)
     throw std::invalid_argument("psfs::EmptySpaceBound: tile images for " + std::to_string(tiles.size()) +
                                 " cameras, table has " + std::to_string(cameras_));
   const int32_t limit_per_view = boundLimitPerView(p, max_probability);
   flags->assign(size_t(ny_) * nz_ * chunks_, 0);
   constexpr int kCellsPerChunk = kChunk / kCell;
-  std::vector<uint8_t> chunk_below(static_cast<size_t>(chunks_), 0);
   size_t skipped = 0;
-  for (int Z = 0; Z < cz_; ++Z)
-    for (int Y = 0; Y < cy_; ++Y) {
-      int n = 0;  // voxels of a row in skipped chunks
-      for (int a = 0; a < chunks_; ++a) {
-        bool all = true;  // a chunk's cells until one is not below
-        for (int X = a * kCellsPerChunk; X < std::min(cx_, (a + 1) * kCellsPerChunk) && all; ++X)
-          all = cellBelow(X + cx_ * (Y + cy_ * Z), tiles, p, k, limit_per_view);
-        chunk_below[size_t(a)] = uint8_t(all);
-        if (all) n += std::min(nx_, (a + 1) * kChunk) - a * kChunk;
-      }
-      if (n == 0) continue;
-      for (int z = Z * kCell; z < std::min(nz_, (Z + 1) * kCell); ++z)
-        for (int y = Y * kCell; y < std::min(ny_, (Y + 1) * kCell); ++y) {
-          std::copy(chunk_below.begin(), chunk_below.end(), flags->begin() + (size_t(y) + size_t(ny_) * z) * chunks_);
-          skipped += size_t(n);
+  // Layers of cells in parallel: each writes its own rows' flags.
+#pragma omp parallel num_threads(resolveThreads(threads)) reduction(+ : skipped)
+  {
+    std::vector<uint8_t> chunk_below(static_cast<size_t>(chunks_), 0);
+#pragma omp for schedule(dynamic, 1)
+    for (int Z = 0; Z < cz_; ++Z)
+      for (int Y = 0; Y < cy_; ++Y) {
+        int n = 0;  // voxels of a row in skipped chunks
+        for (int a = 0; a < chunks_; ++a) {
+          bool all = true;  // a chunk's cells until one is not below
+          for (int X = a * kCellsPerChunk; X < std::min(cx_, (a + 1) * kCellsPerChunk) && all; ++X)
+            all = cellBelow(X + cx_ * (Y + cy_ * Z), tiles, p, k, limit_per_view);
+          chunk_below[size_t(a)] = uint8_t(all);
+          if (all) n += std::min(nx_, (a + 1) * kChunk) - a * kChunk;
         }
-    }
+        if (n == 0) continue;
+        for (int z = Z * kCell; z < std::min(nz_, (Z + 1) * kCell); ++z)
+          for (int y = Y * kCell; y < std::min(ny_, (Y + 1) * kCell); ++y) {
+            std::copy(chunk_below.begin(), chunk_below.end(),
+                      flags->begin() + (size_t(y) + size_t(ny_) * z) * chunks_);
+            skipped += size_t(n);
+          }
+      }
+  }
   return skipped;
 }
 

@@ -89,10 +89,11 @@ class EmptySpaceBound {
   // flags[(y + ny z) * chunks + a] = 1 where every voxel of chunk a (voxels 8a .. 8a + 7) of
   // the grid row provably fuses below `max_probability` (in (0, 1)) with the fusion's
   // parameters p (offset, min_views, drop rule) and occlusion tolerance k, given each camera's
-  // tiles (one per table camera); chunks = ProjectionTable::chunksPerRow(). Returns the voxels
-  // flagged (the floor's layers included, which skippedChunks then clears).
+  // tiles (one per table camera); chunks = ProjectionTable::chunksPerRow(); on `threads`
+  // threads (0: all; PsfsOptions::threads). Returns the voxels flagged (the floor's layers
+  // included, which skippedChunks then clears).
   size_t skippableChunks(const std::vector<TileMaxImage>& tiles, const PsfsRowParams& p, int k,
-                         double max_probability, std::vector<uint8_t>* flags) const;
+                         double max_probability, int threads, std::vector<uint8_t>* flags) const;
   // Writes the flagged chunks of a grid row (flags: the row's chunk flags; out: the row):
   // `fill`, or 0 where a voxel has fewer than min_views observing cameras (what the fusion
   // gives it), the cameras in `absent` (a bit per camera) left out.

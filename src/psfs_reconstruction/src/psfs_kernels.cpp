@@ -292,6 +292,32 @@ __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, con
   }
 }
 
+// + faces of one row along one axis (plusFacesOfRow), 8 voxels (one chunk of offsets) at a time.
+__attribute__((target("avx2,fma"))) void plusFacesAvx2(const KernelView* views, int num_cameras, int nxp,
+                                                       const uint32_t* centres, const uint32_t* offsets,
+                                                       int axis, uint16_t* faces, int x_begin, int x_end) {
+  const int chunks = nxp / ProjectionTable::kChunk;
+  const __m256i pad = _mm256_set1_epi32(kPad16);
+  const __m256i nf = _mm256_set1_epi32(kNoFace);
+  for (int c = 0; c < num_cameras; ++c) {
+    const KernelView& v = views[c];
+    const __m256i not_obs = _mm256_set1_epi32(static_cast<int>(v.not_observed));
+    for (int x0 = x_begin; x0 < x_end; x0 += ProjectionTable::kChunk) {
+      const __m256i uv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(centres + c * nxp + x0));
+      const uint32_t off = offsets[(c * chunks + x0 / ProjectionTable::kChunk) * 3 + axis];
+      const __m256i su = _mm256_add_epi32(_mm256_add_epi32(_mm256_and_si256(uv, _mm256_set1_epi32(0xFFFF)), pad),
+                                          _mm256_set1_epi32(static_cast<int16_t>(off & 0xFFFFu)));
+      const __m256i sv = _mm256_add_epi32(_mm256_add_epi32(_mm256_srli_epi32(uv, 16), pad),
+                                          _mm256_set1_epi32(static_cast<int32_t>(off) >> 16));
+      const __m256i obs = _mm256_xor_si256(_mm256_cmpeq_epi32(uv, not_obs), _mm256_set1_epi32(-1));
+      // Unobserved lanes are not sampled (their positions may lie outside the pair image).
+      const __m256i f = bilinearAvx2Masked(v, nf, obs, su, sv);
+      const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(f, f), 0x08);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(faces + c * nxp + x0), _mm256_castsi256_si128(packed));
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------- AVX-512 ------
 // GCC 12's AVX-512 shift intrinsics start from _mm512_undefined_epi32(), which
 // -Wmaybe-uninitialized reports inside inlined callers (GCC bug 105593): silence it here only.
@@ -561,6 +587,10 @@ void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uin
 #if PSFS_HAVE_X86_DISPATCH
   if (useAvx512()) {
     plusFaces512(views, num_cameras, nxp, centres, offsets, axis, faces, x_begin, x_end);
+    return;
+  }
+  if (vectorKernelsActive()) {
+    plusFacesAvx2(views, num_cameras, nxp, centres, offsets, axis, faces, x_begin, x_end);
     return;
   }
 #endif

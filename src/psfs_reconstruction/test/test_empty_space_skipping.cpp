@@ -172,7 +172,7 @@ SpanShapes spanShapes(const ProjectionTable& table, const PsfsOptions& skipping,
 
 // Every face kernel (the reference, every Highway target this CPU runs, the hand-written AVX-512
 // and AVX2 ones) computes spans of a row and re-samples the carried faces the same way after a
-// skipped chunk (the AVX2 switch also takes plusFacesOfRow's portable branch); a grid whose
+// skipped chunk (plusFacesOfRow's AVX-512, AVX2 and portable branches through the switches); a grid whose
 // sides are not multiples of the cell or the kernels' vectors; the layers under a floor (0
 // whatever is skipped); stored and on-the-fly tables.
 TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
@@ -201,11 +201,14 @@ TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
     EXPECT_GT(n.inner_starts, 100u) << g.describe();
     EXPECT_GT(n.odd_inner_ends, 10u) << g.describe();
     for (int64_t kernel : kernels)
-      for (bool avx2 : {false, true}) {
+      for (int mode : {0, 1, 2}) {  // the CPU's best, the AVX2 switch, the scalar switch
+        const bool avx2 = mode == 1, scalar = mode == 2;
         if (avx2 && kernel != -2) continue;  // the switch picks among the hand-written kernels
+        if (scalar && kernel != -1) continue;  // the reference with plusFacesOfRow's portable branch
         for (double floor_z : {-std::numeric_limits<double>::infinity(), 0.1}) {
           detail::forceFaceRowKernelForTest(kernel);
           forceAvx2Kernels(avx2);
+          forceScalarKernels(scalar);
           PsfsOptions o;
           o.multi_projection = true;
           o.floor_z = floor_z;
@@ -217,6 +220,7 @@ TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
           PsfsFusion(o).fuse(table, ev, &a);
           PsfsFusion(osf).fuse(table, ev, &b);
           const std::string what = g.describe() + " kernel " + std::to_string(kernel) + (avx2 ? " (AVX2)" : "") +
+                                   (scalar ? " (scalar)" : "") +
                                    " floor " + std::to_string(floor_z);
           expectSkippingRule(table, ev, osf, a, b, what);
           if (kernel == -1 || avx2) {
@@ -226,6 +230,7 @@ TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
         }
       }
     forceAvx2Kernels(false);
+    forceScalarKernels(false);
     detail::forceFaceRowKernelForTest(0);
   }
 }
@@ -281,6 +286,70 @@ TEST(EmptySpaceSkipping, FillingAFullFusionGivesTheSkippingFusionsBytes) {
     EXPECT_EQ(full.data, skipped.data) << (cls ? "skin" : "body");
     EXPECT_GT(cache.last_fraction, 0.2) << (cls ? "skin" : "body");
   }
+}
+
+// The tiles against brute force: per 8x8 tile the bound of the largest 2x2 minimum (the right
+// and lower neighbours replicated at the border), the squares of 2 and 4 tiles, inactive tiles
+// and the commonest byte (every 4th row), on images whose sides are not multiples of a tile or
+// a vector, with and without a mask.
+TEST(EmptySpaceSkipping, TileMaxImagesMatchBruteForce) {
+  // The bound of byte b: a constant image's only tile.
+  std::vector<int32_t> term(256);
+  for (int b = 0; b < 256; ++b) {
+    const std::vector<uint8_t> flat(64, uint8_t(b));
+    detail::TileMaxImage t;
+    t.set(flat.data(), 8, 8, 8, cv::Mat());
+    term[size_t(b)] = t.bound[0][0];
+  }
+  EXPECT_LT(term[10], term[200]);
+  cv::RNG rng(17);
+  for (const cv::Size size : {cv::Size(320, 240), cv::Size(37, 29), cv::Size(41, 9), cv::Size(8, 8), cv::Size(3, 2)})
+    for (bool masked : {false, true}) {
+      const int w = size.width, h = size.height;
+      const size_t stride = size_t(w) + 5;
+      std::vector<uint8_t> img(stride * h);
+      for (int v = 0; v < h; ++v)
+        for (int u = 0; u < w; ++u)  // a background byte with bright blobs and noise
+          img[size_t(v) * stride + u] = uint8_t(rng.uniform(0, 8) == 0 ? rng.uniform(0, 256) : 40 + rng.uniform(0, 3));
+      cv::Mat active;
+      if (masked) {
+        active = cv::Mat(h, w, CV_8UC1, cv::Scalar(255));
+        active.at<uint8_t>(h / 2, w / 3) = 0;
+      }
+      detail::TileMaxImage t;
+      t.set(img.data(), w, h, stride, active);
+      const std::string what = std::to_string(w) + "x" + std::to_string(h) + (masked ? " masked" : "");
+      ASSERT_EQ(t.tiles_x, (w + 7) / 8) << what;
+      ASSERT_EQ(t.tiles_y, (h + 7) / 8) << what;
+      auto px = [&](int u, int v) { return img[size_t(std::min(v, h - 1)) * stride + std::min(u, w - 1)]; };
+      std::vector<int32_t> expect(size_t(t.tiles_x) * t.tiles_y);
+      for (int ty = 0; ty < t.tiles_y; ++ty)
+        for (int tx = 0; tx < t.tiles_x; ++tx) {
+          int m = 0;
+          bool off = false;
+          for (int v = ty * 8; v < std::min(h, ty * 8 + 8); ++v)
+            for (int u = tx * 8; u < std::min(w, tx * 8 + 8); ++u) {
+              m = std::max<int>(m, std::min({px(u, v), px(u + 1, v), px(u, v + 1), px(u + 1, v + 1)}));
+              off |= masked && active.at<uint8_t>(v, u) == 0;
+            }
+          expect[size_t(ty) * t.tiles_x + tx] = off ? detail::TileMaxImage::kInactive : term[size_t(m)];
+        }
+      EXPECT_EQ(t.bound[0], expect) << what;
+      for (int l = 1; l < detail::TileMaxImage::kLevels; ++l)
+        for (int ty = 0; ty < t.tiles_y; ++ty)
+          for (int tx = 0; tx < t.tiles_x; ++tx) {
+            const int s = 1 << l;
+            int32_t m = std::numeric_limits<int32_t>::min();
+            for (int y = ty; y < std::min(t.tiles_y, ty + s); ++y)
+              for (int x = tx; x < std::min(t.tiles_x, tx + s); ++x) m = std::max(m, expect[size_t(y) * t.tiles_x + x]);
+            ASSERT_EQ(t.bound[l][size_t(ty) * t.tiles_x + tx], m) << what << " level " << l << " tile " << tx << "," << ty;
+          }
+      std::vector<int> histogram(256, 0);
+      for (int v = 0; v < h; v += 4)
+        for (int u = 0; u < w; ++u) ++histogram[px(u, v)];
+      EXPECT_EQ(int(t.mode), int(std::max_element(histogram.begin(), histogram.end()) - histogram.begin())) << what;
+      EXPECT_FALSE(t.absent) << what;
+    }
 }
 
 TEST(EmptySpaceSkipping, RejectsLevelsThatCouldTouchTheHull) {
