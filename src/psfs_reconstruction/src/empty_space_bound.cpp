@@ -50,18 +50,22 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
   col_max_.resize(size_t(tiles_x) * kTile + 16);
   size_t off_tiles = 0;
   // Every 4th row is plenty for the commonest byte (the background covers most of a view).
-  // Four histograms, a pixel's by u % 4: most pixels hold the same byte, and one counter would
-  // make each increment wait for the last.
-  int histograms[4][256] = {{0}};
+  // Eight histograms, a pixel's by u % 8: most pixels hold the same byte, and one counter would
+  // make each increment wait for the last (store to load).
+  constexpr int kHist = 8;
+  int histograms[kHist][256] = {{0}};
   for (int v = 0; v < height; v += 4) {
     const uint8_t* r = likelihood + size_t(v) * stride;
     int u = 0;
-    for (; u + 4 <= width; u += 4)
-      ++histograms[0][r[u]], ++histograms[1][r[u + 1]], ++histograms[2][r[u + 2]], ++histograms[3][r[u + 3]];
+    for (; u + kHist <= width; u += kHist)
+      for (int i = 0; i < kHist; ++i) ++histograms[i][r[u + i]];
     for (; u < width; ++u) ++histograms[0][r[u]];
   }
   int histogram[256];
-  for (int i = 0; i < 256; ++i) histogram[i] = histograms[0][i] + histograms[1][i] + histograms[2][i] + histograms[3][i];
+  for (int i = 0; i < 256; ++i) {
+    histogram[i] = 0;
+    for (int j = 0; j < kHist; ++j) histogram[i] += histograms[j][i];
+  }
   mode = uint8_t(std::max_element(histogram, histogram + 256) - histogram);
   const std::vector<int32_t>& term = byteBounds();
   std::vector<uint8_t> off(static_cast<size_t>(tiles_x));
@@ -120,16 +124,19 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
   }
   for (int l = 1; l < kLevels; ++l) {
     const int h = 1 << (l - 1);  // the squares of level l - 1 that make one of level l
-    for (int ty = 0; ty < tiles_y; ++ty) {
-      const int32_t* __restrict s0 = &bound[l - 1][size_t(ty) * tiles_x];
-      const int32_t* __restrict s1 = &bound[l - 1][size_t(std::min(ty + h, tiles_y - 1)) * tiles_x];
-      int32_t* __restrict d = &bound[l][size_t(ty) * tiles_x];
-      for (int tx = 0; tx < tiles_x; ++tx) {
-        const int tx2 = std::min(tx + h, tiles_x - 1);
+    const int nx = tiles_x, ny = tiles_y;
+    for (int ty = 0; ty < ny; ++ty) {
+      const int32_t* __restrict s0 = &bound[l - 1][size_t(ty) * nx];
+      const int32_t* __restrict s1 = &bound[l - 1][size_t(std::min(ty + h, ny - 1)) * nx];
+      int32_t* __restrict d = &bound[l][size_t(ty) * nx];
+      auto max4 = [&](int tx, int tx2) {
         const int32_t a = s0[tx] > s0[tx2] ? s0[tx] : s0[tx2];
         const int32_t b = s1[tx] > s1[tx2] ? s1[tx] : s1[tx2];
-        d[tx] = a > b ? a : b;
-      }
+        return a > b ? a : b;
+      };
+      int tx = 0;
+      for (; tx + h < nx; ++tx) d[tx] = max4(tx, tx + h);  // no clamp: vectorises
+      for (; tx < nx; ++tx) d[tx] = max4(tx, nx - 1);
     }
   }
 }

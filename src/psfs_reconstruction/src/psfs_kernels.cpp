@@ -109,23 +109,33 @@ PSFS_AVX2 __m256i lerpAvx2(__m256i q, __m256i su, __m256i sv) {
   return _mm256_madd_epi16(lr, wu);
 }
 
-PSFS_AVX2 __m256i quadIndexAvx2(const KernelView& v, __m256i su, __m256i sv) {
-  return _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(sv, 4), _mm256_set1_epi32(v.quad_stride)),
-                          _mm256_srli_epi32(su, 4));
+// Positions packed as 16-bit (u | v << 16) per lane, as the AVX-512 kernel keeps them (all lie
+// in [0, 65535]: PackedUV::kMaxImageSide): one 16-bit add moves a position by a chunk's packed
+// offset, and one madd gives the quad index u0 + v0 * stride.
+PSFS_AVX2 __m256i quadIndexAvx2(const KernelView& v, __m256i s) {
+  return _mm256_madd_epi16(_mm256_srli_epi16(s, 4), _mm256_set1_epi32(1 | (v.quad_stride << 16)));
 }
 
-PSFS_AVX2 __m256i bilinearAvx2(const KernelView& v, __m256i su, __m256i sv) {
-  const __m256i q = _mm256_i32gather_epi32(reinterpret_cast<const int*>(v.pairs), quadIndexAvx2(v, su, sv), 2);
-  return lerpAvx2(q, su, sv);
+PSFS_AVX2 __m256i bilinearAvx2(const KernelView& v, __m256i s) {
+  const __m256i q = _mm256_i32gather_epi32(reinterpret_cast<const int*>(v.pairs), quadIndexAvx2(v, s), 2);
+  return lerpAvx2(q, s, _mm256_srli_epi32(s, 16));
 }
 
 // Only the lanes in `need` (all bits set) are sampled; the others keep `src`.
-PSFS_AVX2 __m256i bilinearAvx2Masked(const KernelView& v, __m256i src, __m256i need, __m256i su,
-                                     __m256i sv) {
+PSFS_AVX2 __m256i bilinearAvx2Masked(const KernelView& v, __m256i src, __m256i need, __m256i s) {
   const __m256i q = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(v.pairs),
-                                                quadIndexAvx2(v, su, sv), need, 2);
-  return _mm256_blendv_epi8(src, lerpAvx2(q, su, sv), need);
+                                                quadIndexAvx2(v, s), need, 2);
+  return _mm256_blendv_epi8(src, lerpAvx2(q, s, _mm256_srli_epi32(s, 16)), need);
 }
+
+// A packed position (the centre plus the padding) moved by a packed offset, +1 or -1 times.
+PSFS_AVX2 __m256i plusOffsetAvx2(__m256i s, uint32_t off) {
+  return _mm256_add_epi16(s, _mm256_set1_epi32(static_cast<int>(off)));
+}
+PSFS_AVX2 __m256i minusOffsetAvx2(__m256i s, uint32_t off) {
+  return _mm256_sub_epi16(s, _mm256_set1_epi32(static_cast<int>(off)));
+}
+PSFS_AVX2 __m256i paddedAvx2(__m256i uv) { return _mm256_add_epi16(uv, _mm256_set1_epi16(kPad16)); }
 
 PSFS_AVX2 void cswapAvx2(__m256i& a, __m256i& b) {
   const __m256i lo = _mm256_min_epi32(a, b);
@@ -145,7 +155,7 @@ PSFS_AVX2 __m256i middlePair6Avx2(__m256i s[6]) {
 // -y or -z faces of 8 voxels from a face buffer (kNoFace: sample from this voxel), and this
 // row's + faces stored back for the next row / layer.
 PSFS_AVX2 __m256i carryFacesAvx2(const KernelView& v, uint16_t* buf, __m256i plus, __m256i obs,
-                                 __m256i su, __m256i sv) {
+                                 __m256i minus_s) {
   const __m256i nf = _mm256_set1_epi32(kNoFace);
   const __m256i below = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(buf)));
   const __m256i need = _mm256_and_si256(obs, _mm256_cmpeq_epi32(below, nf));
@@ -153,7 +163,7 @@ PSFS_AVX2 __m256i carryFacesAvx2(const KernelView& v, uint16_t* buf, __m256i plu
   const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(keep, keep), 0x08);
   _mm_storeu_si128(reinterpret_cast<__m128i*>(buf), _mm256_castsi256_si128(packed));
   if (_mm256_testz_si256(need, need)) return below;
-  return bilinearAvx2Masked(v, below, need, su, sv);
+  return bilinearAvx2Masked(v, below, need, minus_s);
 }
 
 PSFS_AVX2 __m256i logTermAvx2(__m256i m) {  // = logTermOfPair per lane
@@ -238,13 +248,59 @@ inline void startCarry(const PsfsRowParams& p, const RowSpan& span, int32_t* car
   for (int c = 0; c < p.num_cameras; ++c) carry[c] = span.x_carry ? span.x_carry[c] : -1;
 }
 
+// N cameras' terms for the 8 voxels of chunk `chunk` (from x0), stage by stage across the
+// cameras: each camera's chain (index, gather, lerp, median, log) is long and serial, and
+// interleaving four keeps more gathers in flight (groups of 2: -2..7 %, of 4: -5..8 % more, of 8: as 4, in the frame's time on a Zen 5 under the AVX2 switch).
+// Added to the running sum, inactive count and k lowest terms in camera order.
+template <int K, int N>
+PSFS_AVX2 void faceCamerasAvx2(const PsfsRowParams& p, int c0, int chunk, int x0, const uint32_t* centres,
+                               const uint32_t* offsets, uint16_t* yface, uint16_t* zface, int32_t* carry,
+                               __m256i& sum, __m256i& inactive, __m256i* m) {
+  const __m256i no_ev = _mm256_set1_epi32(kNoEv);
+  const __m256i shift1 = _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6);
+  __m256i uv[N], unobs[N], obs[N], sc[N], s[N][6];
+  const uint32_t* off[N];
+  for (int j = 0; j < N; ++j) {
+    const int c = c0 + j;
+    uv[j] = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(centres + c * p.nxp + x0));
+    unobs[j] = _mm256_cmpeq_epi32(uv[j], _mm256_set1_epi32(static_cast<int>(p.views[c].not_observed)));
+    obs[j] = _mm256_xor_si256(unobs[j], _mm256_set1_epi32(-1));
+    sc[j] = paddedAvx2(uv[j]);
+    off[j] = offsets + (c * p.chunks + chunk) * 3;
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int j = 0; j < N; ++j) s[j][2 * a + 1] = bilinearAvx2(p.views[c0 + j], plusOffsetAvx2(sc[j], off[j][a]));
+  for (int j = 0; j < N; ++j) {
+    const int c = c0 + j;
+    const KernelView& v = p.views[c];
+    // -x faces: the previous voxel's +x face where it is observed.
+    const __m256i cf = _mm256_set1_epi32(carry[c]);
+    const __m256i lower = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(obs[j], shift1),
+                                             _mm256_cmpgt_epi32(cf, _mm256_set1_epi32(-1)), 0x01);
+    s[j][0] = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(s[j][1], shift1), cf, 0x01);
+    const __m256i need = _mm256_andnot_si256(lower, obs[j]);
+    if (!_mm256_testz_si256(need, need))
+      s[j][0] = bilinearAvx2Masked(v, s[j][0], need, minusOffsetAvx2(sc[j], off[j][0]));
+    carry[c] = _mm256_extract_epi32(obs[j], 7) ? _mm256_extract_epi32(s[j][1], 7) : -1;
+    s[j][2] = carryFacesAvx2(v, yface + c * p.nxp + x0, s[j][3], obs[j], minusOffsetAvx2(sc[j], off[j][1]));
+    s[j][4] = carryFacesAvx2(v, zface + c * p.nxp + x0, s[j][5], obs[j], minusOffsetAvx2(sc[j], off[j][2]));
+  }
+  __m256i tm[N];
+  for (int j = 0; j < N; ++j) tm[j] = logTermAvx2(middlePair6Avx2(s[j]));
+  for (int j = 0; j < N; ++j) {
+    const KernelView& v = p.views[c0 + j];
+    // No evidence: not observed, or (with an active mask) the centre's pixel switched off.
+    const __m256i off_view =
+        v.has_mask ? _mm256_cmpgt_epi32(centreTermAvx2(v, uv[j]), _mm256_setzero_si256()) : unobs[j];
+    accumulateAvx2<K>(_mm256_blendv_epi8(tm[j], no_ev, off_view), sum, inactive, m);
+  }
+}
+
 template <int K>
 __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, const uint32_t* centres,
                                                      const uint32_t* offsets, uint16_t* yface,
                                                      uint16_t* zface, uint8_t* out, const RowSpan& span) {
   const __m256i no_ev = _mm256_set1_epi32(kNoEv);
-  const __m256i pad = _mm256_set1_epi32(kPad16);
-  const __m256i shift1 = _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6);
   thread_local std::vector<int32_t> carry_store;
   carry_store.resize(size_t(p.num_cameras));
   int32_t* carry = carry_store.data();  // +x face of voxel x0 - 1 per camera, -1: not observed
@@ -256,38 +312,13 @@ __attribute__((target("avx2,fma"))) void faceRowAvx2(const PsfsRowParams& p, con
     __m256i sum = _mm256_setzero_si256(), inactive = _mm256_setzero_si256();
     __m256i m[K > 0 ? K : 1];
     for (int j = 0; j < K; ++j) m[j] = no_ev;
-    for (int c = 0; c < p.num_cameras; ++c) {
-      const KernelView& v = p.views[c];
-      const __m256i uv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(centres + c * p.nxp + x0));
-      const __m256i unobs = _mm256_cmpeq_epi32(uv, _mm256_set1_epi32(static_cast<int>(v.not_observed)));
-      const __m256i obs = _mm256_xor_si256(unobs, _mm256_set1_epi32(-1));
-      const __m256i uf = _mm256_add_epi32(_mm256_and_si256(uv, _mm256_set1_epi32(0xFFFF)), pad);
-      const __m256i vf = _mm256_add_epi32(_mm256_srli_epi32(uv, 16), pad);
-      const uint32_t* off = offsets + (c * p.chunks + chunk) * 3;
-      __m256i du[3], dv[3], s[6];
-      for (int a = 0; a < 3; ++a) {
-        du[a] = _mm256_set1_epi32(static_cast<int16_t>(off[a] & 0xFFFFu));
-        dv[a] = _mm256_set1_epi32(static_cast<int32_t>(off[a]) >> 16);
-        s[2 * a + 1] = bilinearAvx2(v, _mm256_add_epi32(uf, du[a]), _mm256_add_epi32(vf, dv[a]));
-      }
-      // -x faces: the previous voxel's +x face where it is observed.
-      const __m256i cf = _mm256_set1_epi32(carry[c]);
-      const __m256i lower = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(obs, shift1),
-                                               _mm256_cmpgt_epi32(cf, _mm256_set1_epi32(-1)), 0x01);
-      s[0] = _mm256_blend_epi32(_mm256_permutevar8x32_epi32(s[1], shift1), cf, 0x01);
-      const __m256i need = _mm256_andnot_si256(lower, obs);
-      if (!_mm256_testz_si256(need, need))
-        s[0] = bilinearAvx2Masked(v, s[0], need, _mm256_sub_epi32(uf, du[0]), _mm256_sub_epi32(vf, dv[0]));
-      carry[c] = _mm256_extract_epi32(obs, 7) ? _mm256_extract_epi32(s[1], 7) : -1;
-      s[2] = carryFacesAvx2(v, yface + c * p.nxp + x0, s[3], obs, _mm256_sub_epi32(uf, du[1]),
-                            _mm256_sub_epi32(vf, dv[1]));
-      s[4] = carryFacesAvx2(v, zface + c * p.nxp + x0, s[5], obs, _mm256_sub_epi32(uf, du[2]),
-                            _mm256_sub_epi32(vf, dv[2]));
-      const __m256i tm = logTermAvx2(middlePair6Avx2(s));
-      // No evidence: not observed, or (with an active mask) the centre's pixel switched off.
-      const __m256i off_view = v.has_mask ? _mm256_cmpgt_epi32(centreTermAvx2(v, uv), _mm256_setzero_si256()) : unobs;
-      accumulateAvx2<K>(_mm256_blendv_epi8(tm, no_ev, off_view), sum, inactive, m);
-    }
+    int c = 0;
+    for (; c + 4 <= p.num_cameras; c += 4)
+      faceCamerasAvx2<K, 4>(p, c, chunk, x0, centres, offsets, yface, zface, carry, sum, inactive, m);
+    for (; c + 2 <= p.num_cameras; c += 2)
+      faceCamerasAvx2<K, 2>(p, c, chunk, x0, centres, offsets, yface, zface, carry, sum, inactive, m);
+    for (; c < p.num_cameras; ++c)
+      faceCamerasAvx2<K, 1>(p, c, chunk, x0, centres, offsets, yface, zface, carry, sum, inactive, m);
     finaliseAvx2<K>(p, sum, inactive, m, out + x0, last - x0);  // x0 < last: nxp - nx < 8
   }
 }
@@ -297,7 +328,6 @@ __attribute__((target("avx2,fma"))) void plusFacesAvx2(const KernelView* views, 
                                                        const uint32_t* centres, const uint32_t* offsets,
                                                        int axis, uint16_t* faces, int x_begin, int x_end) {
   const int chunks = nxp / ProjectionTable::kChunk;
-  const __m256i pad = _mm256_set1_epi32(kPad16);
   const __m256i nf = _mm256_set1_epi32(kNoFace);
   for (int c = 0; c < num_cameras; ++c) {
     const KernelView& v = views[c];
@@ -305,13 +335,9 @@ __attribute__((target("avx2,fma"))) void plusFacesAvx2(const KernelView* views, 
     for (int x0 = x_begin; x0 < x_end; x0 += ProjectionTable::kChunk) {
       const __m256i uv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(centres + c * nxp + x0));
       const uint32_t off = offsets[(c * chunks + x0 / ProjectionTable::kChunk) * 3 + axis];
-      const __m256i su = _mm256_add_epi32(_mm256_add_epi32(_mm256_and_si256(uv, _mm256_set1_epi32(0xFFFF)), pad),
-                                          _mm256_set1_epi32(static_cast<int16_t>(off & 0xFFFFu)));
-      const __m256i sv = _mm256_add_epi32(_mm256_add_epi32(_mm256_srli_epi32(uv, 16), pad),
-                                          _mm256_set1_epi32(static_cast<int32_t>(off) >> 16));
       const __m256i obs = _mm256_xor_si256(_mm256_cmpeq_epi32(uv, not_obs), _mm256_set1_epi32(-1));
       // Unobserved lanes are not sampled (their positions may lie outside the pair image).
-      const __m256i f = bilinearAvx2Masked(v, nf, obs, su, sv);
+      const __m256i f = bilinearAvx2Masked(v, nf, obs, plusOffsetAvx2(paddedAvx2(uv), off));
       const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi32(f, f), 0x08);
       _mm_storeu_si128(reinterpret_cast<__m128i*>(faces + c * nxp + x0), _mm256_castsi256_si128(packed));
     }
@@ -460,12 +486,59 @@ PSFS_AVX512 __m512i chunkOffsets512(const uint32_t* off0, const uint32_t* off1, 
                             _mm256_set1_epi32(static_cast<int32_t>(off1[axis])), 1);
 }
 
+// N cameras' terms for the 16 voxels from x0 (lanes: one or two chunks), stage by stage across
+// the cameras as faceCamerasAvx2 does (groups of 2 on a Zen 5: -16 % in the frame's
+// multi-projection time, -18 % with skipping; groups of 4 no better).
+constexpr int kAvx512Group = 2;
+template <int K, int N>
+PSFS_AVX512 void faceCameras512(const PsfsRowParams& p, int c0, int chunk, int x0, bool two, __mmask16 lanes,
+                                const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
+                                uint16_t* zface, int32_t* carry, __m512i& sum, __m512i& inactive, __m512i* m) {
+  const __m512i no_ev = _mm512_set1_epi32(kNoEv);
+  const __m512i pad = _mm512_set1_epi16(kPad16);
+  __m512i uv[N], pp[N], d[N][3], s[N][6];
+  __mmask16 obs[N];
+  for (int j = 0; j < N; ++j) {
+    const int c = c0 + j;
+    uv[j] = loadCentres512(centres + c * p.nxp + x0, two);
+    obs[j] = lanes & _mm512_cmpneq_epi32_mask(uv[j], _mm512_set1_epi32(static_cast<int>(p.views[c].not_observed)));
+    // Both halves of uv plus the pad, as 16-bit lanes; the offsets are packed (du | dv << 16)
+    // int16 pairs already, so one 16-bit add / sub gives both coordinates of a sample.
+    pp[j] = _mm512_add_epi16(uv[j], pad);
+    const uint32_t* off0 = offsets + (c * p.chunks + chunk) * 3;
+    const uint32_t* off1 = two ? off0 + 3 : off0;
+    for (int a = 0; a < 3; ++a) d[j][a] = chunkOffsets512(off0, off1, a);
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int j = 0; j < N; ++j) s[j][2 * a + 1] = bilinear512(p.views[c0 + j], _mm512_add_epi16(pp[j], d[j][a]));
+  for (int j = 0; j < N; ++j) {
+    const int c = c0 + j;
+    const KernelView& v = p.views[c];
+    // -x faces: the previous voxel's +x face where it is observed.
+    const int32_t cf = carry[c];
+    s[j][0] = _mm512_alignr_epi32(s[j][1], _mm512_set1_epi32(cf), 15);
+    const __mmask16 lower = static_cast<__mmask16>((obs[j] << 1) | (cf >= 0 ? 1 : 0));
+    const __mmask16 need = obs[j] & static_cast<__mmask16>(~lower);
+    if (need) s[j][0] = bilinear512Masked(v, s[j][0], need, _mm512_sub_epi16(pp[j], d[j][0]));
+    carry[c] = (obs[j] >> 15) & 1 ? _mm_extract_epi32(_mm512_extracti32x4_epi32(s[j][1], 3), 3) : -1;
+    s[j][2] = carryFaces512(v, yface + c * p.nxp + x0, lanes, s[j][3], obs[j], _mm512_sub_epi16(pp[j], d[j][1]));
+    s[j][4] = carryFaces512(v, zface + c * p.nxp + x0, lanes, s[j][5], obs[j], _mm512_sub_epi16(pp[j], d[j][2]));
+  }
+  __m512i tm[N];
+  for (int j = 0; j < N; ++j) tm[j] = logTerm512(middlePair6_512(s[j]));
+  for (int j = 0; j < N; ++j) {
+    const KernelView& v = p.views[c0 + j];
+    const __mmask16 off_view = v.has_mask ? _mm512_cmpgt_epi32_mask(centreTerm512(v, uv[j]), _mm512_setzero_si512())
+                                          : static_cast<__mmask16>(~obs[j]);
+    accumulate512<K>(_mm512_mask_mov_epi32(tm[j], off_view, no_ev), sum, inactive, m);
+  }
+}
+
 template <int K>
 __attribute__((target("avx512f,avx512bw,avx2,fma"))) void faceRowAvx512(
     const PsfsRowParams& p, const uint32_t* centres, const uint32_t* offsets, uint16_t* yface,
     uint16_t* zface, uint8_t* out, const RowSpan& span) {
   const __m512i no_ev = _mm512_set1_epi32(kNoEv);
-  const __m512i pad = _mm512_set1_epi16(kPad16);
   thread_local std::vector<int32_t> carry_store;
   carry_store.resize(size_t(p.num_cameras));
   int32_t* carry = carry_store.data();  // +x face of voxel x0 - 1 per camera, -1: not observed
@@ -479,34 +552,11 @@ __attribute__((target("avx512f,avx512bw,avx2,fma"))) void faceRowAvx512(
     __m512i sum = _mm512_setzero_si512(), inactive = _mm512_setzero_si512();
     __m512i m[K > 0 ? K : 1];
     for (int j = 0; j < K; ++j) m[j] = no_ev;
-    for (int c = 0; c < p.num_cameras; ++c) {
-      const KernelView& v = p.views[c];
-      const __m512i uv = loadCentres512(centres + c * p.nxp + x0, two);
-      const __mmask16 obs = lanes & _mm512_cmpneq_epi32_mask(uv, _mm512_set1_epi32(static_cast<int>(v.not_observed)));
-      // Both halves of uv plus the pad, as 16-bit lanes; the offsets are packed (du | dv << 16)
-      // int16 pairs already, so one 16-bit add / sub gives both coordinates of a sample.
-      const __m512i pp = _mm512_add_epi16(uv, pad);
-      const uint32_t* off0 = offsets + (c * p.chunks + chunk) * 3;
-      const uint32_t* off1 = two ? off0 + 3 : off0;
-      __m512i d[3], s[6];
-      for (int a = 0; a < 3; ++a) {
-        d[a] = chunkOffsets512(off0, off1, a);
-        s[2 * a + 1] = bilinear512(v, _mm512_add_epi16(pp, d[a]));
-      }
-      // -x faces: the previous voxel's +x face where it is observed.
-      const int32_t cf = carry[c];
-      s[0] = _mm512_alignr_epi32(s[1], _mm512_set1_epi32(cf), 15);
-      const __mmask16 lower = static_cast<__mmask16>((obs << 1) | (cf >= 0 ? 1 : 0));
-      const __mmask16 need = obs & static_cast<__mmask16>(~lower);
-      if (need) s[0] = bilinear512Masked(v, s[0], need, _mm512_sub_epi16(pp, d[0]));
-      carry[c] = (obs >> 15) & 1 ? _mm_extract_epi32(_mm512_extracti32x4_epi32(s[1], 3), 3) : -1;
-      s[2] = carryFaces512(v, yface + c * p.nxp + x0, lanes, s[3], obs, _mm512_sub_epi16(pp, d[1]));
-      s[4] = carryFaces512(v, zface + c * p.nxp + x0, lanes, s[5], obs, _mm512_sub_epi16(pp, d[2]));
-      const __m512i tm = logTerm512(middlePair6_512(s));
-      const __mmask16 off_view = v.has_mask ? _mm512_cmpgt_epi32_mask(centreTerm512(v, uv), _mm512_setzero_si512())
-                                            : static_cast<__mmask16>(~obs);
-      accumulate512<K>(_mm512_mask_mov_epi32(tm, off_view, no_ev), sum, inactive, m);
-    }
+    int c = 0;
+    for (; c + kAvx512Group <= p.num_cameras; c += kAvx512Group)
+      faceCameras512<K, kAvx512Group>(p, c, chunk, x0, two, lanes, centres, offsets, yface, zface, carry, sum, inactive, m);
+    for (; c < p.num_cameras; ++c)
+      faceCameras512<K, 1>(p, c, chunk, x0, two, lanes, centres, offsets, yface, zface, carry, sum, inactive, m);
     finalise512<K>(p, sum, inactive, m, out + x0, last - x0);  // x0 < last: nxp - nx < 8
   }
 }
