@@ -354,19 +354,26 @@ bool EmptySpaceBound::cellBelow(int cell, const std::vector<TileMaxImage>& tiles
 bool boundBelow(const int32_t* all, int n_all, int32_t* some, int n_some, const PsfsRowParams& p, int k,
                 int32_t limit_per_view) {
   // A voxel's views are all of the first kind and some of the second; its mean is largest with
-  // the second kind's largest bounds, so j of those, for every j.
+  // the second kind's largest bounds, so j of those, for every j. The sum of the n - k largest
+  // of n bounds is their total less the k smallest (a selection, not a sort).
   std::sort(some, some + n_some, std::greater<int32_t>());
+  int64_t sum_all = 0;
+  for (int i = 0; i < n_all; ++i) sum_all += all[i];
   int32_t views[kMaxBoundCameras];
+  int64_t sum = sum_all;  // all + the j largest of some
   for (int j = 0; j <= n_some; ++j) {
+    if (j > 0) sum += some[j - 1];
     const int n = n_all + j;
     if (n < p.min_views) continue;  // such voxels fuse to 0
-    std::copy(all, all + n_all, views);
-    std::copy(some, some + j, views + n_all);
-    const int kept = n - std::min(k, n - 1);
-    std::partial_sort(views, views + kept, views + n, std::greater<int32_t>());
-    int64_t sum = 0;
-    for (int i = 0; i < kept; ++i) sum += views[i];
-    if (sum >= int64_t(kept) * limit_per_view) return false;
+    const int dropped = std::min(k, n - 1), kept = n - dropped;
+    int64_t kept_sum = sum;
+    if (dropped > 0) {
+      std::copy(all, all + n_all, views);
+      std::copy(some, some + j, views + n_all);
+      std::nth_element(views, views + (dropped - 1), views + n);
+      for (int i = 0; i < dropped; ++i) kept_sum -= views[i];
+    }
+    if (kept_sum >= int64_t(kept) * limit_per_view) return false;
   }
   return true;
 }

@@ -352,6 +352,46 @@ TEST(EmptySpaceSkipping, TileMaxImagesMatchBruteForce) {
     }
 }
 
+// boundBelow against the rule it implements, by brute force: for every count j of the cameras
+// that see only part of a cell (their j largest bounds), every voxel with n = all + j >= min_views
+// views keeps its n - min(k, n - 1) largest bounds, and their sum must stay below kept * limit.
+TEST(EmptySpaceSkipping, BoundBelowMatchesBruteForce) {
+  cv::RNG rng(5);
+  size_t below = 0, cases = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const int n_all = rng.uniform(0, 9), n_some = rng.uniform(0, 5);
+    std::vector<int32_t> all(size_t(n_all) + 1), some(size_t(n_some) + 1);
+    for (int32_t& b : all) b = -rng.uniform(0, 4000);
+    for (int32_t& b : some) b = -rng.uniform(0, 4000);
+    detail::PsfsRowParams p;
+    p.min_views = rng.uniform(1, 4);
+    const int k = rng.uniform(0, 5);
+    const int32_t limit = -rng.uniform(0, 2500);
+    bool expect = true;
+    std::vector<int32_t> sorted_some(some.begin(), some.begin() + n_some);
+    std::sort(sorted_some.begin(), sorted_some.end(), std::greater<int32_t>());
+    for (int j = 0; j <= n_some; ++j) {
+      const int n = n_all + j;
+      if (n < p.min_views) continue;
+      std::vector<int32_t> v(all.begin(), all.begin() + n_all);
+      v.insert(v.end(), sorted_some.begin(), sorted_some.begin() + j);
+      std::sort(v.begin(), v.end(), std::greater<int32_t>());
+      const int kept = n - std::min(k, n - 1);
+      int64_t sum = 0;
+      for (int i = 0; i < kept; ++i) sum += v[size_t(i)];
+      if (sum >= int64_t(kept) * limit) expect = false;
+    }
+    const bool got = detail::boundBelow(all.data(), n_all, some.data(), n_some, p, k, limit);
+    ASSERT_EQ(got, expect) << "trial " << trial << ": " << n_all << " all, " << n_some << " some, k " << k
+                           << ", min_views " << p.min_views << ", limit " << limit;
+    below += got;
+    ++cases;
+  }
+  // Both answers occur often enough for the comparison to mean something.
+  EXPECT_GT(below, cases / 10);
+  EXPECT_LT(below, cases - cases / 10);
+}
+
 TEST(EmptySpaceSkipping, RejectsLevelsThatCouldTouchTheHull) {
   PsfsOptions o;
   o.multi_projection = true;
