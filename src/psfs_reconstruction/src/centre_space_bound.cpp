@@ -251,36 +251,42 @@ double CentreSpaceBound::flagChunks(const ProjectionTable& table, const SetTiles
   const int32_t limit_per_view = boundLimitPerView(p, max_probability);
   projectLattice(table, threads);
   const int px = cx_ + 1, py = cy_ + 1, pz = cz_ + 1;
-  // Each camera's window: the pixels the projected corners can round to.
-  windows_.assign(size_t(cameras_) * 4, 0);
+  // Each camera's window: the pixels the projected corners can round to (derived again only
+  // when the lattice's projections change: a grid that stays keeps its windows).
+  const uint64_t lattice_revision = lattice_table_->revision();
+  const bool windows_kept = windows_revision_ == lattice_revision && windows_.size() == size_t(cameras_) * 4;
+  if (!windows_kept) windows_.assign(size_t(cameras_) * 4, 0);
   tiles_.resize(size_t(cameras_));
 #pragma omp parallel for num_threads(resolveThreads(threads)) schedule(dynamic, 1)
   for (int c = 0; c < cameras_; ++c) {
-    const uint32_t none = PackedUV::notObserved(table.camera(c).height);
-    int u0 = std::numeric_limits<int>::max(), u1 = -1, v0 = u0, v1 = -1;
-    for (int Z = 0; Z < pz; ++Z)
-      for (int Y = 0; Y < py; ++Y)
-        for (int X = 0; X < px; ++X) {
-          const uint32_t q = corner(c, X, Y, Z);
-          if (q == none) continue;
-          const int u = int(q & 0xFFFFu), v = int(q >> 16);
-          u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
-        }
-    // The largest lens slack of any box (a block's, which holds its cells' boxes).
-    int slack = kSlack16;
-    if (lens_k_[size_t(c)] > 0.0)
-      for (int Z = 0; Z < cz_; Z += 2)
-        for (int Y = 0; Y < cy_; Y += 2)
-          for (int X = 0; X < cx_; X += 2) {
-            const CornerSpan b = cornerSpan(c, X, Y, Z, std::min(cx_, X + 2), std::min(cy_, Y + 2), std::min(cz_, Z + 2));
-            if (b.u1 >= 0) slack = std::max(slack, kSlack16 + lensSlack16(c, b.u1 - b.u0, b.v1 - b.v0));
-          }
-    const int w = table.camera(c).width, h = table.camera(c).height;
     int* win = &windows_[size_t(c) * 4];
-    win[0] = std::max(0, pixelLow(u0, slack)), win[1] = std::max(0, pixelLow(v0, slack));
-    win[2] = std::min(w - 1, pixelHigh(u1, slack)), win[3] = std::min(h - 1, pixelHigh(v1, slack));
+    if (!windows_kept) {
+      const uint32_t none = PackedUV::notObserved(table.camera(c).height);
+      int u0 = std::numeric_limits<int>::max(), u1 = -1, v0 = u0, v1 = -1;
+      for (int Z = 0; Z < pz; ++Z)
+        for (int Y = 0; Y < py; ++Y)
+          for (int X = 0; X < px; ++X) {
+            const uint32_t q = corner(c, X, Y, Z);
+            if (q == none) continue;
+            const int u = int(q & 0xFFFFu), v = int(q >> 16);
+            u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+          }
+      // The largest lens slack of any box (a block's, which holds its cells' boxes).
+      int slack = kSlack16;
+      if (lens_k_[size_t(c)] > 0.0)
+        for (int Z = 0; Z < cz_; Z += 2)
+          for (int Y = 0; Y < cy_; Y += 2)
+            for (int X = 0; X < cx_; X += 2) {
+              const CornerSpan b = cornerSpan(c, X, Y, Z, std::min(cx_, X + 2), std::min(cy_, Y + 2), std::min(cz_, Z + 2));
+              if (b.u1 >= 0) slack = std::max(slack, kSlack16 + lensSlack16(c, b.u1 - b.u0, b.v1 - b.v0));
+            }
+      const int w = table.camera(c).width, h = table.camera(c).height;
+      win[0] = std::max(0, pixelLow(u0, slack)), win[1] = std::max(0, pixelLow(v0, slack));
+      win[2] = std::min(w - 1, pixelHigh(u1, slack)), win[3] = std::min(h - 1, pixelHigh(v1, slack));
+    }
     set_tiles(c, &tiles_[size_t(c)], win[0], win[1], win[2], win[3]);
   }
+  windows_revision_ = lattice_revision;
   const size_t n_cells = size_t(cx_) * cy_ * cz_;
   below_.assign(n_cells, 0);
   const int first_layer = std::clamp(p.first_layer, 0, nz_);

@@ -128,6 +128,7 @@ class CentreSpaceBound {
   // revision stays boxes_revision_; last_revision_: the revision of the previous frame.
   std::vector<PixelBox> cell_boxes_, block_boxes_;
   uint64_t boxes_revision_ = 0, last_revision_ = 0;
+  uint64_t windows_revision_ = 0;  // the lattice revision windows_ was derived for
   std::vector<uint8_t> below_;        // per cell
   std::vector<uint8_t> x_below_;      // per cell row and chunk: the cells along x the margin reads
 };

@@ -198,9 +198,9 @@ TEST(HandSpaceSkipping, EveryKernelThreadCountAndStorageGivesTheSameBytes) {
   detail::forceRowKernelForTest(0);
 }
 
-// A grid that stays (the workspace's, or a hand that holds still) keeps its cells' boxes from
-// the second frame on: the same bytes as a fusion that derives them afresh, frame after frame
-// and on new evidence.
+// A grid that stays (the workspace's, or a hand that holds still) keeps its cells' boxes and its
+// cameras' windows from the second frame on: the same bytes as a fusion that derives them
+// afresh, frame after frame and on new evidence.
 TEST(HandSpaceSkipping, AGridThatStaysKeepsItsBoxes) {
   const HandFrames& h = handFrames();
   const ProjectionTable tables[2] = {
