@@ -7,8 +7,8 @@
 //    (psfs_kernels.cpp) on x86 CPUs with AVX2; Highway's portable target (psfs_face_hwy.cpp)
 //    everywhere else; faceRowScalar the reference. The Highway kernel (issue 17) serves every
 //    target but measures slower than the hand-written ones (16 mm volume, 1 thread, Zen 5
-//    EPYC, 2026-12-05, docs/benchmarks.md): AVX3 4.25 ms against 3.35 ms (1.27x), AVX2
-//    6.39 ms against 6.03 ms (1.06x). Why: Highway 1.0 (Debian 12) has no byte multiply-add
+//    EPYC, 2026-12-07, both with cameras in groups, docs/benchmarks.md): AVX3 4.51 ms against
+//    3.27 ms (1.38x), AVX2 6.25 ms against 5.18 ms (1.21x). Why: Highway 1.0 (Debian 12) has no byte multiply-add
 //    (maddubs), so its column lerp takes ~8 32-bit operations where AVX2 needs 3 and AVX-512's
 //    16-entry weight tables (vpermd) 2; no getexp / getmant for the log term's split; and no
 //    masked gathers. Its portable targets beat the reference: SCALAR 42.1 ms, SSE4 26.0 ms

@@ -159,12 +159,16 @@ TEST(PsfsFusion, WithoutAvx2TheHighwayKernelsTakeTheBestTarget) {
 // slabs start inside the grid (their first faces come from plusFacesOfRow).
 TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
   const auto rig = tabletop_capture::makeDefaultRig();
-  std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
-  const auto cams = partlyObservingCameras();
+  const std::vector<ViewImage> all_views = test::twoSpheresWithMaskedView(rig.cameras);
+  const auto all_cams = partlyObservingCameras();
   const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm), oddWidthGrid()};
   const std::vector<int64_t> targets = detail::hwyRowTargets();
   ASSERT_FALSE(targets.empty());
+  // Cameras in groups of 4 or 2 and a tail of single ones: 8, 7 and 3 cameras.
+  for (const size_t num_cameras : {size_t(8), size_t(7), size_t(3)})
   for (const VoxelGrid& grid : grids) {
+    const std::vector<tabletop_capture::CameraModel> cams(all_cams.begin(), all_cams.begin() + num_cameras);
+    const std::vector<ViewImage> views(all_views.begin(), all_views.begin() + num_cameras);
     ProjectionTableOptions to;
     to.multi_projection = true;
     const ProjectionTable table(grid, cams, to);
@@ -187,7 +191,8 @@ TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
             PsfsFusion(o).fuse(table, ev, &out);
             detail::forceFaceRowKernelForTest(0);
             ASSERT_EQ(out.data, ref.data) << detail::hwyTargetName(t) << ", " << grid.describe() << ", k " << k
-                                          << ", zero outside " << zero_outside << ", " << threads << " threads";
+                                          << ", zero outside " << zero_outside << ", " << threads << " threads, "
+                                          << num_cameras << " cameras";
           }
         detail::forceFaceRowKernelForTest(0);
         EXPECT_GT(countAbove(ref, thresholdByte(o.threshold)), 100u) << "the spheres are in the hull";
