@@ -66,6 +66,9 @@ struct TermTiles {
   }
   // [l][ty * tiles_x + tx]: over the tiles [tx, tx + 2^l) x [ty, ty + 2^l) (clamped to the window).
   std::vector<uint16_t> level_[kLevels];
+  // Where every tile has evidence and none lacks it (clean_): the levels' largest bytes alone.
+  bool clean_ = false;
+  std::vector<uint8_t> level8_[kLevels];
 };
 
 class CentreSpaceBound {
