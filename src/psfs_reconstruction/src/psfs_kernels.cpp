@@ -634,6 +634,9 @@ PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector) {
 void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
                     const uint32_t* offsets, int axis, uint16_t* faces, int x_begin, int x_end) {
   if (x_end < 0) x_end = nxp;
+  // The vector paths write whole chunks: a range inside one would overwrite faces kept.
+  if (x_begin < 0 || x_end > nxp || x_begin % ProjectionTable::kChunk != 0 || x_end % ProjectionTable::kChunk != 0)
+    throw std::logic_error("psfs::plusFacesOfRow: x range must be whole chunks of the row");
 #if PSFS_HAVE_X86_DISPATCH
   if (useAvx512()) {
     plusFaces512(views, num_cameras, nxp, centres, offsets, axis, faces, x_begin, x_end);

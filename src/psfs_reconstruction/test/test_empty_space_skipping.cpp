@@ -200,6 +200,18 @@ TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
     EXPECT_GT(n.partial_rows, 100u) << g.describe();
     EXPECT_GT(n.inner_starts, 100u) << g.describe();
     EXPECT_GT(n.odd_inner_ends, 10u) << g.describe();
+    // The reference's skipping bytes (faceRowScalar, plusFacesOfRow's portable branch) per floor.
+    std::vector<ProbabilityVolume> ref(2);
+    for (int f = 0; f < 2; ++f) {
+      detail::forceFaceRowKernelForTest(-1);
+      forceScalarKernels(true);
+      PsfsOptions osf = os;
+      osf.floor_z = f == 0 ? -std::numeric_limits<double>::infinity() : 0.1;
+      osf.threads = 2;
+      PsfsFusion(osf).fuse(table, ev, &ref[size_t(f)]);
+      forceScalarKernels(false);
+      detail::forceFaceRowKernelForTest(0);
+    }
     for (int64_t kernel : kernels)
       for (int mode : {0, 1, 2}) {  // the CPU's best, the AVX2 switch, the scalar switch
         const bool avx2 = mode == 1, scalar = mode == 2;
@@ -223,6 +235,7 @@ TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
                                    (scalar ? " (scalar)" : "") +
                                    " floor " + std::to_string(floor_z);
           expectSkippingRule(table, ev, osf, a, b, what);
+          EXPECT_EQ(b.data, ref[floor_z > 0.0 ? 1 : 0].data) << what << " (against the reference's)";
           if (kernel == -1 || avx2) {
             PsfsFusion(osf).fuse(fly_table, ev, &c);
             EXPECT_EQ(b.data, c.data) << what << " (on-the-fly table)";
@@ -312,12 +325,20 @@ TEST(EmptySpaceSkipping, TileMaxImagesMatchBruteForce) {
         for (int u = 0; u < w; ++u)  // a background byte with bright blobs and noise
           img[size_t(v) * stride + u] = uint8_t(rng.uniform(0, 8) == 0 ? rng.uniform(0, 256) : 40 + rng.uniform(0, 3));
       cv::Mat active;
+      std::vector<int16_t> terms;  // the evidence's form of the same switched-off pixel
       if (masked) {
         active = cv::Mat(h, w, CV_8UC1, cv::Scalar(255));
         active.at<uint8_t>(h / 2, w / 3) = 0;
+        terms.assign(size_t(w) * h, int16_t(-5));
+        terms[size_t(h / 2) * w + w / 3] = 1;
       }
-      detail::TileMaxImage t;
+      detail::TileMaxImage t, by_terms;
       t.set(img.data(), w, h, stride, active);
+      if (masked) {  // terms index rows of width w: the same bytes without the stride's gap
+        std::vector<uint8_t> packed(size_t(w) * h);
+        for (int v = 0; v < h; ++v) std::copy_n(&img[size_t(v) * stride], w, &packed[size_t(v) * w]);
+        by_terms.set(packed.data(), w, h, size_t(w), cv::Mat(), terms.data());
+      }
       const std::string what = std::to_string(w) + "x" + std::to_string(h) + (masked ? " masked" : "");
       ASSERT_EQ(t.tiles_x, (w + 7) / 8) << what;
       ASSERT_EQ(t.tiles_y, (h + 7) / 8) << what;
@@ -335,6 +356,11 @@ TEST(EmptySpaceSkipping, TileMaxImagesMatchBruteForce) {
           expect[size_t(ty) * t.tiles_x + tx] = off ? detail::TileMaxImage::kInactive : term[size_t(m)];
         }
       EXPECT_EQ(t.bound[0], expect) << what;
+      if (masked) {
+        for (int l = 0; l < detail::TileMaxImage::kLevels; ++l)
+          EXPECT_EQ(by_terms.bound[l], t.bound[l]) << what << " through the terms, level " << l;
+        EXPECT_EQ(by_terms.mode, t.mode) << what;
+      }
       for (int l = 1; l < detail::TileMaxImage::kLevels; ++l)
         for (int ty = 0; ty < t.tiles_y; ++ty)
           for (int tx = 0; tx < t.tiles_x; ++tx) {

@@ -65,6 +65,14 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
       PsfsFusion(o).fuse(table, ev, &vec);  // AVX-512 where the CPU has it, else AVX2
       forceAvx2Kernels(true);
       PsfsFusion(o).fuse(table, ev, &vec2);
+      {  // layers split over 3 threads: slabs that start inside the grid (plusFacesOfRow's AVX2 path)
+        PsfsOptions o3 = o;
+        o3.threads = 3;
+        ProbabilityVolume vec2_3;
+        PsfsFusion(o3).fuse(table, ev, &vec2_3);
+        ASSERT_EQ(vec2_3.data, vec2.data) << grid.describe() << " multi " << multi << " k " << k << ", "
+                                          << num_cameras << " cameras (AVX2, 3 threads)";
+      }
       forceAvx2Kernels(false);
       forceScalarKernels(true);
       PsfsFusion(o).fuse(table, ev, &sca);
