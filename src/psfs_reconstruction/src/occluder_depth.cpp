@@ -48,6 +48,7 @@ std::vector<cv::Mat> occluderDepths(const ProbabilityVolume& volume, uint8_t thr
     const Eigen::Vector3d o = g.origin - cam.center();
     const float ox = float(o.x()), oy = float(o.y()), oz = float(o.z()), s = float(g.voxel_size);
     float nearest = std::numeric_limits<float>::infinity();
+    int u0 = cam.width, v0 = cam.height, u1 = -1, v1 = -1;  // the drawn pixels' box
     for (const Eigen::Vector3i& v : occupied) {
       int idx;
       if (use_table) {  // the stored table's entry (footprint level removed), as voxelCentrePixel reads it
@@ -64,13 +65,27 @@ std::vector<cv::Mat> occluderDepths(const ProbabilityVolume& volume, uint8_t thr
       const float dist = std::sqrt(dx * dx + dy * dy + dz * dz);
       px[idx] = std::min(px[idx], dist);
       nearest = std::min(nearest, dist);
+      const int pu = idx % cam.width, pv = idx / cam.width;
+      u0 = std::min(u0, pu), u1 = std::max(u1, pu), v0 = std::min(v0, pv), v1 = std::max(v1, pv);
     }
     if (!std::isfinite(nearest)) continue;
     const int r = static_cast<int>(std::ceil(half_diag * std::max(cam.fx, cam.fy) / std::max(0.05, double(nearest))));
-    if (r > 0) cv::erode(d, d, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * r + 1, 2 * r + 1)),
-                         cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(kNone));
+    spreadNearest(&d, r, cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1));
   }
   return depth;
+}
+
+void spreadNearest(cv::Mat* depth, int radius, const cv::Rect& drawn) {
+  if (!depth || depth->type() != CV_32F) throw std::invalid_argument("spreadNearest: depth must be CV_32F");
+  if (radius <= 0 || drawn.empty()) return;
+  // Only pixels within the radius of a drawn one can change: filter that part (the filter reads
+  // the +infinity around it from the whole image, as a filter of the whole image would).
+  const cv::Rect part = (drawn + cv::Size(2 * radius, 2 * radius) - cv::Point(radius, radius)) &
+                        cv::Rect(0, 0, depth->cols, depth->rows);
+  if (part.empty()) return;
+  cv::Mat roi = (*depth)(part);
+  cv::erode(roi, roi, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * radius + 1, 2 * radius + 1)),
+            cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(std::numeric_limits<float>::infinity()));
 }
 
 cv::Mat frontOcclusionMask(const cv::Mat& depth, const tabletop_capture::CameraModel& camera,

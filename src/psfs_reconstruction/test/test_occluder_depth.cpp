@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
 
 #include "psfs_reconstruction/occluder_depth.h"
 #include "tabletop_capture/default_rig.h"
@@ -72,6 +75,33 @@ TEST(OccluderDepth, TheBodysDistanceAndTheMasksOfPointsBehindAndInFront) {
     EXPECT_NEAR(s.depthAt(from_table[c], s.pixel(c, s.centre)), s.depthAt(depth[c], s.pixel(c, s.centre)),
                 2 * half_diag);
   }
+}
+
+// The min filter over the drawn pixels' neighbourhood only is the min filter of the whole
+// image: random sparse drawings, boxes touching the image's borders, radii 1-9.
+TEST(OccluderDepth, SpreadingOnlyNearTheDrawnPixelsIsTheWholeFilter) {
+  cv::RNG rng(3);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int trial = 0; trial < 60; ++trial) {
+    const int w = 40 + rng.uniform(0, 300), h = 30 + rng.uniform(0, 220);
+    cv::Mat d(h, w, CV_32F, cv::Scalar(inf));
+    const int bu0 = rng.uniform(0, w), bv0 = rng.uniform(0, h);
+    const int bu1 = std::min(w - 1, bu0 + rng.uniform(0, w / 2)), bv1 = std::min(h - 1, bv0 + rng.uniform(0, h / 2));
+    int u0 = w, v0 = h, u1 = -1, v1 = -1;
+    for (int i = 0; i < 1 + rng.uniform(0, 200); ++i) {
+      const int u = rng.uniform(bu0, bu1 + 1), v = rng.uniform(bv0, bv1 + 1);
+      d.at<float>(v, u) = float(rng.uniform(0.3, 2.0));
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+    const int r = rng.uniform(1, 10);
+    cv::Mat whole;
+    cv::erode(d, whole, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * r + 1, 2 * r + 1)), cv::Point(-1, -1), 1,
+              cv::BORDER_CONSTANT, cv::Scalar(inf));
+    spreadNearest(&d, r, cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1));
+    ASSERT_EQ(cv::norm(d != whole, cv::NORM_L1), 0.0) << "trial " << trial << ", " << w << "x" << h << ", r " << r;
+  }
+  cv::Mat f(4, 4, CV_8U);
+  EXPECT_THROW(spreadNearest(&f, 1, cv::Rect(0, 0, 1, 1)), std::invalid_argument);
 }
 
 TEST(OccluderDepth, AnEmptyVolumeHidesNothing) {

@@ -38,6 +38,12 @@ std::vector<cv::Mat> occluderDepths(const ProbabilityVolume& volume, uint8_t thr
                                     const std::vector<tabletop_capture::CameraModel>& cameras,
                                     const ProjectionTable* table, int threads = 0);
 
+// The min filter of occluderDepths: each pixel of `depth` (CV_32F, +infinity where nothing is
+// drawn) takes the smallest value within `radius` pixels (a square), pixels beyond the image
+// counting as +infinity. `drawn` holds every finite pixel; only the pixels within the radius
+// of it are filtered (the rest stay +infinity, as a filter of the whole image leaves them).
+void spreadNearest(cv::Mat* depth, int radius, const cv::Rect& drawn);
+
 // The active mask (ViewImage::active) of one camera for a sub-volume around `point`: 0 where the
 // body lies nearer to the camera than the point by more than `margin` (m), 255 elsewhere. The
 // margin keeps the hand's own surface and its wrist (within about 0.1 m of its centre) from
