@@ -161,6 +161,8 @@ def main():
         # Not a ROS node (it needs no ROS): stopped by signal, like a crash or a redeploy.
         pid = pid_of(a.pid, "room_server")
         if pid is None:
+            # It never started or died (e.g. its port taken): the restart cannot be judged.
+            room_proc["missing"] = True
             print("[fault_matrix] no room_server process under the launch", flush=True)
         else:
             os.kill(pid, 15)
@@ -285,6 +287,9 @@ def main():
         lost = max(0, int(round(base_rate * (end - f0))) - watch.count(f0, end))
         message = watch.first_log(f0, end)
         problems = []
+        if fault.name == "room_server_restart" and room_proc.get("missing"):
+            problems.append(f"no room_server was running before the fault (it did not start or "
+                            f"died: port {a.room_port} taken? see launch.log)")
         if recovered is None:
             problems.append(f"no recovery within {a.max_recovery:g} s")
         texts = fault.reports if isinstance(fault.reports, tuple) else (fault.reports,)

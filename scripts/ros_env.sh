@@ -1,9 +1,9 @@
 # Sourced by the scripts: Debian's python3 first, the workspace's devel space, and a private
 # ROS master port so that runs never meet another run's master.
 export PATH=/usr/bin:/bin:$PATH
-# A TCP port free on the loopback now.
+# A TCP port free on the loopback now, below the kernel's ephemeral range (free_port.py: why).
 free_port() {
-  /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+  /usr/bin/python3 "$ROOT/scripts/free_port.py"
 }
 set +u
 # shellcheck disable=SC1091

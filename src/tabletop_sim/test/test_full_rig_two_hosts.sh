@@ -41,7 +41,7 @@ fi
 sed -e 's/^width: .*/width: 320/' -e 's/^height: .*/height: 240/' \
   "$ROOT/src/tabletop_capture/config/camera_capture.yaml" > "$WORK/capture.yaml"
 
-PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+PORT=$(/usr/bin/python3 "$ROOT/scripts/free_port.py")
 export ROS_MASTER_URI="http://127.0.0.1:$PORT"
 RIG="$WORK/images/rig.yaml"
 # The pipeline host starts the master (so that pSfS sees the cameras from their first, empty

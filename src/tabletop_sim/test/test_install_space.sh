@@ -59,8 +59,9 @@ XML
   if [ -z "${KEEP_WORK:-}" ] && [ "$FAILED" -eq 0 ]; then rm -rf "$WORK"; fi
   exit 0
 }
+# A free loopback port below the kernel's ephemeral range (scripts/free_port.py: why).
 free_port() {
-  /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+  /usr/bin/python3 "$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)/scripts/free_port.py"
 }
 
 # ---- install ---------------------------------------------------------------------------------

@@ -35,7 +35,7 @@ XML
 }
 
 export PATH=/usr/bin:/bin:$PATH
-PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+PORT=$(/usr/bin/python3 "$ROOT/scripts/free_port.py")
 export ROS_MASTER_URI="http://127.0.0.1:$PORT" ROS_HOSTNAME=127.0.0.1 ROS_LOG_DIR="$WORK/log"
 LOG="$WORK/run.log"
 name="bag_with_${CAMERAS}_bayer_cameras_gives_the_same_results_at_any_rate_and_when_played_twice"
