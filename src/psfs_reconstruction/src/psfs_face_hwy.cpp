@@ -29,6 +29,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "log_term_table.h"
 #include "psfs_kernels.h"
 #include "psfs_reconstruction/projection_table.h"
 
@@ -160,13 +161,17 @@ HWY_INLINE VI carryFaces(const KernelView& v, uint16_t* buf, int left, VI plus, 
 }
 
 // logTermOfPair lane by lane: the same float operations, each fmaf a MulAdd where that is
-// fused, else logTermOfPair itself per lane.
-HWY_INLINE VI logTermLanes(VI m) {
+// fused, else the function's own values from its table (log_term_table.h) per lane.
+HWY_INLINE VI logTermLanes(VI m, const int16_t* table) {
   const DI di;
   if constexpr (!kFusedMulAdd) {
+    // The clamp: log_term_table.h. Plain loads into an array that is loaded whole, as
+    // Highway's own GatherIndex on SSE4, so that the compiler inserts lane by lane.
+    const VI index = hn::Min(hn::Max(m, hn::Zero(di)), hn::Set(di, kMaxMedianPair));
+    HWY_ALIGN int32_t in[hn::MaxLanes(DI())];
     HWY_ALIGN int32_t lanes[hn::MaxLanes(DI())];
-    hn::Store(m, di, lanes);
-    for (size_t i = 0; i < hn::Lanes(di); ++i) lanes[i] = logTermOfPair(lanes[i]);
+    hn::Store(index, di, in);
+    for (size_t i = 0; i < hn::Lanes(di); ++i) lanes[i] = table[in[i]];
     return hn::Load(di, lanes);
   } else {
     const DF df;
@@ -201,7 +206,7 @@ HWY_INLINE VI shiftUpOne(VI v, int32_t first, const Indices& up) {
 template <int K, int N, class Indices>
 HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, int left, const uint32_t* centres,
                             const uint32_t* offsets, uint16_t* yface, uint16_t* zface, int32_t* carry,
-                            const Indices& up, VI& sum, VI& inactive, VI* m) {
+                            const Indices& up, const int16_t* log_table, VI& sum, VI& inactive, VI* m) {
   const DI di;
   const DU du;
   const int lanes = static_cast<int>(hn::Lanes(di));
@@ -238,7 +243,7 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
     s[j][4] = carryFaces(v, zface + size_t(c) * p.nxp + x0, left, s[j][5], obs[j], hn::Sub(base[j], d[j][2]));
   }
   VI tm[N];
-  for (int j = 0; j < N; ++j) tm[j] = logTermLanes(middlePair6Lanes(s[j]));
+  for (int j = 0; j < N; ++j) tm[j] = logTermLanes(middlePair6Lanes(s[j]), log_table);
   for (int j = 0; j < N; ++j) {
     const KernelView& v = p.views[c0 + j];
     // No evidence: not observed, or (with an active mask) the centre's pixel switched off.
@@ -264,6 +269,7 @@ void faceRowHwy(const PsfsRowParams& p, const uint32_t* centres, const uint32_t*
   const VI zero = hn::Zero(di), no_ev = hn::Set(di, kVoxNoEvidence);
   HWY_ALIGN static constexpr int32_t kUp[16] = {0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14};
   const auto up = hn::SetTableIndices(di, kUp);
+  const int16_t* log_table = kFusedMulAdd ? nullptr : logTermTable();
   thread_local std::vector<int32_t> carry_store;
   carry_store.resize(size_t(p.num_cameras));
   int32_t* carry = carry_store.data();  // +x face of voxel x0 - 1 per camera, -1: not observed
@@ -283,9 +289,9 @@ void faceRowHwy(const PsfsRowParams& p, const uint32_t* centres, const uint32_t*
     for (int j = 0; j < K; ++j) m[j] = no_ev;
     int c = 0;
     for (; c + kCameraGroup <= p.num_cameras; c += kCameraGroup)
-      faceCameras<K, kCameraGroup>(p, c, chunk, x0, left, centres, offsets, yface, zface, carry, up, sum, inactive, m);
+      faceCameras<K, kCameraGroup>(p, c, chunk, x0, left, centres, offsets, yface, zface, carry, up, log_table, sum, inactive, m);
     for (; c < p.num_cameras; ++c)
-      faceCameras<K, 1>(p, c, chunk, x0, left, centres, offsets, yface, zface, carry, up, sum, inactive, m);
+      faceCameras<K, 1>(p, c, chunk, x0, left, centres, offsets, yface, zface, carry, up, log_table, sum, inactive, m);
     // Fewer than 8 lanes: the row's last vectors may hold only padding.
     if (x0 < last) finaliseLanes<K>(p, sum, inactive, m, out + x0, last - x0);
   }

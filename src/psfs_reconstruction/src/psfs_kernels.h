@@ -11,8 +11,10 @@
 //    3.27 ms (1.38x), AVX2 6.25 ms against 5.18 ms (1.21x). Why: Highway 1.0 (Debian 12) has no byte multiply-add
 //    (maddubs), so its column lerp takes ~8 32-bit operations where AVX2 needs 3 and AVX-512's
 //    16-entry weight tables (vpermd) 2; no getexp / getmant for the log term's split; and no
-//    masked gathers. Its portable targets beat the reference: SCALAR 42.1 ms, SSE4 26.0 ms
-//    against faceRowScalar's 44.7 ms.
+//    masked gathers. Its 128-bit target without gathers or FMA, SSE4 (the nearest to a NEON core
+//    measurable here), takes 9.05 ms, 1.81x the hand-written AVX2 kernel's 5.05 ms in the same
+//    run (it takes the log term from a table, log_term_table.h); SCALAR 30.4 ms, faceRowScalar
+//    (the reference) 44.7 ms.
 // The plain C++ reference kernels are made of the per-voxel functions of voxel_arithmetic.h,
 // which the CUDA kernels (gpu_psfs_fusion.h) run too: one source for the arithmetic.
 #pragma once

@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <climits>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "../src/fusion_common.h"  // private: the face walk, checked against a brute force below
+#include "../src/log_term_table.h"
 #include "../src/psfs_kernels.h"
 #include "fusion_test_utils.h"
 #include "psfs_reconstruction/psfs_fusion.h"
@@ -206,6 +209,33 @@ TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
         EXPECT_GT(countAbove(ref, thresholdByte(o.threshold)), 100u) << "the spheres are in the hull";
       }
   }
+}
+
+// The targets without a fused multiply-add (SSE4, EMU128, SCALAR) take the log term of a median
+// pair from a table (log_term_table.h): it must hold logTermOfPair's own value for every pair a
+// kernel can make, and entry 0 the value of every negative one. The function is
+// round(1024 ln(max(m, 256) / 130560)) in float: ln x near 12 carries a few ulps (2^-20 each)
+// and 1024 times that is a few thousandths of a step, so it may differ from the
+// double-precision value by one only where that lies within 0.01 of a half.
+TEST(PsfsFusion, LogTermTableHoldsTheFunctionsOwnValues) {
+  const int16_t* table = detail::logTermTable();
+  ASSERT_EQ(detail::logTermTable(), table) << "built once";
+  int off_by_one = 0;
+  for (int32_t m = 0; m <= detail::kMaxMedianPair; ++m) {
+    ASSERT_EQ(table[m], detail::logTermOfPair(m)) << "m " << m;
+    const double exact = 1024.0 * std::log(std::max(m, 256) / 130560.0);
+    const long nearest = std::lround(exact);
+    if (table[m] != nearest) {
+      ++off_by_one;
+      ASSERT_EQ(std::abs(table[m] - nearest), 1) << "m " << m;
+      ASSERT_LT(std::abs(std::abs(exact - std::floor(exact)) - 0.5), 0.01) << "m " << m << ": not at a half";
+    }
+  }
+  EXPECT_EQ(table[0], table[256]) << "pairs below 256 are floored at half a byte step";
+  EXPECT_EQ(table[detail::kMaxMedianPair], 0);
+  EXPECT_LT(off_by_one, (detail::kMaxMedianPair + 1) / 100) << "of " << detail::kMaxMedianPair + 1;
+  // The kernels clamp pairs below 0 to 0 (log_term_table.h): the function's value there too.
+  for (int32_t m : {-1, -65280, INT32_MIN}) EXPECT_EQ(table[0], detail::logTermOfPair(m)) << "m " << m;
 }
 
 // The shared face samples follow the rule of psfs_kernels.h whatever the walk: a brute force
