@@ -6,11 +6,16 @@
 // checks all compiled targets against it).
 //
 // Highway 1.0 has neither x86's byte multiply-adds (maddubs) nor masked gathers, so:
-//  * the bilinear lerp runs in 32-bit lanes on packed 16-bit pairs (bilinearLanes), so it
-//    works on every target, SCALAR too; x86 does the index and the row lerp with pmaddwd;
-//  * a face sampled from the upper voxel gathers all lanes (they all stay inside the pair
-//    image's replicated border, like the hand-written kernels' unmasked + face gathers) and
-//    keeps the lanes that need it.
+//  * the bilinear lerp runs in 32-bit lanes on packed 16-bit pairs (lerpLanes) on every
+//    target, SCALAR too; x86 targets (SSSE3 up) take the hand-written kernels' steps instead:
+//    the index and the row lerp with pmaddwd, the column lerps with pmaddubsw, the weights
+//    from 16-entry tables on AVX-512;
+//  * a face sampled from the upper voxel gathers only the lanes that need it on AVX2 and
+//    AVX-512 (masked gathers, bilinearLanesMasked); elsewhere all lanes (they all stay inside
+//    the pair image's replicated border, like the hand-written kernels' unmasked + face
+//    gathers) and keeps those.
+// Such target-specific steps give the same integers as the portable ones (the tests compare
+// every target's bytes with faceRowScalar's).
 //
 // It serves the portable path; on x86 with AVX2 the hand-written kernels stay the default, as
 // they measure faster (psfs_kernels.h, docs/benchmarks.md).
@@ -64,28 +69,73 @@ HWY_INLINE VI pairMulAdd(VU x, VU w) {
   return hn::RearrangeToOddPlusEven(
       hn::ReorderWidenMulAccumulate(di, hn::BitCast(d16, x), hn::BitCast(d16, w), hn::Zero(di), unused), unused);
 }
+
+// The column lerps as one byte multiply-add (pmaddubsw, which Highway 1.0 lacks): bytes of q
+// (a, c, b, d) = (top left, bottom left, top right, bottom right) times bytes (16 - fv, fv,
+// 16 - fv, fv) give (left | right << 16), the values of the portable lerp below. AVX-512 takes
+// the weights from 16-entry tables (vpermd reads only the low 4 bits of each index: fv is bits
+// 16-19 of s), as the hand-written kernel did.
+HWY_INLINE VU columnLerpX86(VU q, VU s) {
+#if HWY_TARGET <= HWY_AVX3
+  const __m512i wv_table = _mm512_setr_epi32(
+      0x00100010, 0x010F010F, 0x020E020E, 0x030D030D, 0x040C040C, 0x050B050B, 0x060A060A, 0x07090709,
+      0x08080808, 0x09070907, 0x0A060A06, 0x0B050B05, 0x0C040C04, 0x0D030D03, 0x0E020E02, 0x0F010F01);
+  return VU{_mm512_maddubs_epi16(q.raw, _mm512_permutexvar_epi32(_mm512_srli_epi32(s.raw, 16), wv_table))};
+#else
+  const DU du;
+  const VU fv = hn::And(hn::ShiftRight<16>(s), hn::Set(du, 15u));
+  const VU wv = hn::Add(hn::Mul(fv, hn::Set(du, 0x00FF00FFu)), hn::Set(du, 0x00100010u));
+#if HWY_TARGET <= HWY_AVX2
+  return VU{_mm256_maddubs_epi16(q.raw, wv.raw)};
+#else
+  return VU{_mm_maddubs_epi16(q.raw, wv.raw)};
+#endif
+#endif
+}
+
+// The row lerp's int16 weights (16 - fu | fu << 16), fu = bits 0-3 of s.
+HWY_INLINE VU rowWeightsX86(VU s) {
+#if HWY_TARGET <= HWY_AVX3
+  const __m512i wu_table = _mm512_setr_epi32(
+      0x00000010, 0x0001000F, 0x0002000E, 0x0003000D, 0x0004000C, 0x0005000B, 0x0006000A, 0x00070009,
+      0x00080008, 0x00090007, 0x000A0006, 0x000B0005, 0x000C0004, 0x000D0003, 0x000E0002, 0x000F0001);
+  return VU{_mm512_permutexvar_epi32(s.raw, wu_table)};
+#else
+  const DU du;
+  const VU fu = hn::And(s, hn::Set(du, 15u));
+  return hn::Add(hn::Sub(hn::ShiftLeft<16>(fu), fu), hn::Set(du, 16u));
+#endif
+}
 #else
 #define PSFS_HWY_PAIR_MUL_ADD 0
 #endif
 
-// Bilinear samples at padded fixed-point positions s, packed (su | sv << 16, 1/16 px, origin at
-// pixel -kQuadPad, each in [0, 65535]): the integers of bilinear() (voxel_arithmetic.h).
-HWY_INLINE VI bilinearLanes(const KernelView& v, VU s) {
+// Byte offsets of the quads under padded fixed-point positions s, packed (su | sv << 16,
+// 1/16 px, origin at pixel -kQuadPad, each in [0, 65535]); the pair images are uint16:
+// 2 (u0 + v0 stride), u0 = su >> 4, v0 = sv >> 4.
+HWY_INLINE VI quadOffsets(const KernelView& v, VU s) {
   const DI di;
   const DU du;
-  // Byte offset of the quad (the pair images are uint16): 2 (u0 + v0 stride), u0 = su >> 4,
-  // v0 = sv >> 4.
 #if PSFS_HWY_PAIR_MUL_ADD
   const hn::Repartition<uint16_t, DI> du16;  // 2 stride < 2^15: PackedUV::kMaxImageSide
-  const VI at = pairMulAdd(hn::BitCast(du, hn::ShiftRight<4>(hn::BitCast(du16, s))),
-                           hn::Set(du, 2u | (2u * v.quad_stride) << 16));
+  (void)di;
+  return pairMulAdd(hn::BitCast(du, hn::ShiftRight<4>(hn::BitCast(du16, s))),
+                    hn::Set(du, 2u | (2u * v.quad_stride) << 16));
 #else
-  const VI at = hn::BitCast(di, hn::Add(hn::Mul(hn::ShiftRight<20>(s), hn::Set(du, 2u * v.quad_stride)),
-                                        hn::And(hn::ShiftRight<3>(s), hn::Set(du, 0x1FFEu))));
+  return hn::BitCast(di, hn::Add(hn::Mul(hn::ShiftRight<20>(s), hn::Set(du, 2u * v.quad_stride)),
+                                 hn::And(hn::ShiftRight<3>(s), hn::Set(du, 0x1FFEu))));
 #endif
-  // Two pairs in one 32-bit lane: bytes (a, c, b, d) = (top left, bottom left, top right,
-  // bottom right).
-  const VU q = hn::BitCast(du, hn::GatherOffset(di, reinterpret_cast<const int32_t*>(v.pairs), at));
+}
+
+// The bilinear sample of gathered quads q at s: the integers of bilinear() (voxel_arithmetic.h).
+// Two pairs in one 32-bit lane of q: bytes (a, c, b, d) = (top left, bottom left, top right,
+// bottom right).
+HWY_INLINE VI lerpLanes(VU q, VU s) {
+#if PSFS_HWY_PAIR_MUL_ADD
+  return pairMulAdd(columnLerpX86(q, s), rowWeightsX86(s));
+#else
+  const DI di;
+  const DU du;
   const VU mask8 = hn::Set(du, 0x00FF00FFu);
   const VU ab = hn::And(q, mask8), cd = hn::And(hn::ShiftRight<8>(q), mask8);
   // Both column lerps at once: (left | right << 16) = 16 (a | b << 16) + fv ((c | d << 16) -
@@ -94,14 +144,38 @@ HWY_INLINE VI bilinearLanes(const KernelView& v, VU s) {
   const VU fv = hn::And(hn::ShiftRight<16>(s), hn::Set(du, 15u));
   const VU lr = hn::Add(hn::ShiftLeft<4>(ab), hn::Mul(hn::Sub(cd, ab), fv));
   const VU fu = hn::And(s, hn::Set(du, 15u));
-#if PSFS_HWY_PAIR_MUL_ADD  // left (16 - fu) + right fu, weights (16 - fu | fu << 16)
-  return pairMulAdd(lr, hn::Add(hn::Sub(hn::ShiftLeft<16>(fu), fu), hn::Set(du, 16u)));
-#else
   // The row lerp is the upper half of one product: (left | right << 16) (fu | (16 - fu) << 16)
   // = left fu + (left (16 - fu) + right fu) << 16 mod 2^32, with left fu < 2^16 and the
   // result (<= 255 * 256) < 2^16. fu + (16 - fu) << 16 = fu (1 - 2^16) + 16 << 16.
   const VU wu = hn::Add(hn::Mul(fu, hn::Set(du, 0xFFFF0001u)), hn::Set(du, 16u << 16));
   return hn::BitCast(di, hn::ShiftRight<16>(hn::Mul(lr, wu)));
+#endif
+}
+
+// Bilinear samples at padded packed positions s.
+HWY_INLINE VI bilinearLanes(const KernelView& v, VU s) {
+  const DI di;
+  const DU du;
+  return lerpLanes(hn::BitCast(du, hn::GatherOffset(di, reinterpret_cast<const int32_t*>(v.pairs),
+                                                    quadOffsets(v, s))), s);
+}
+
+// Bilinear samples in the lanes of `need`, src in the others. AVX2 and AVX-512 gather only
+// those lanes (masked gathers, which Highway 1.0 lacks); elsewhere every lane is gathered (all
+// positions lie inside the pair image's replicated border) and the others discarded.
+HWY_INLINE VI bilinearLanesMasked(const KernelView& v, VI src, hn::Mask<DI> need, VU s) {
+#if PSFS_HWY_PAIR_MUL_ADD && HWY_TARGET <= HWY_AVX3
+  const DU du;
+  const VI q{_mm512_mask_i32gather_epi32(_mm512_setzero_si512(), need.raw, quadOffsets(v, s).raw, v.pairs, 1)};
+  return hn::IfThenElse(need, lerpLanes(hn::BitCast(du, q), s), src);
+#elif PSFS_HWY_PAIR_MUL_ADD && HWY_TARGET <= HWY_AVX2
+  const DU du;
+  const DI di;
+  const VI q{_mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(v.pairs),
+                                         quadOffsets(v, s).raw, hn::VecFromMask(di, need).raw, 1)};
+  return hn::IfThenElse(need, lerpLanes(hn::BitCast(du, q), s), src);
+#else
+  return hn::IfThenElse(need, bilinearLanes(v, s), src);
 #endif
 }
 
@@ -157,7 +231,7 @@ HWY_INLINE VI carryFaces(const KernelView& v, uint16_t* buf, int left, VI plus, 
     hn::BlendedStore(keep, hn::FirstN(d16, static_cast<size_t>(left)), d16, buf);
   }
   if (hn::AllFalse(di, need)) return below;
-  return hn::IfThenElse(need, bilinearLanes(v, s), below);
+  return bilinearLanesMasked(v, below, need, s);
 }
 
 // logTermOfPair lane by lane: the same float operations, each fmaf a MulAdd where that is
@@ -175,11 +249,17 @@ HWY_INLINE VI logTermLanes(VI m, const int16_t* table) {
     return hn::Load(di, lanes);
   } else {
     const DF df;
-    const auto x = hn::ConvertTo(df, hn::Max(m, hn::Set(di, 256)));
+    const VF x = hn::ConvertTo(df, hn::Max(m, hn::Set(di, 256)));
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+    // getexp / getmant give exactly the exponent and the mantissa in [1, 2) of a normal float.
+    const VF e{_mm512_getexp_ps(x.raw)};
+    const VF t = hn::Sub(VF{_mm512_getmant_ps(x.raw, _MM_MANT_NORM_1_2, _MM_MANT_SIGN_src)}, hn::Set(df, 1.0f));
+#else
     const VI bits = hn::BitCast(di, x);
-    const auto e = hn::ConvertTo(df, hn::Sub(hn::ShiftRight<23>(bits), hn::Set(di, 127)));
-    const auto f = hn::BitCast(df, hn::Or(hn::And(bits, hn::Set(di, 0x007FFFFF)), hn::Set(di, 0x3F800000)));
-    const auto t = hn::Sub(f, hn::Set(df, 1.0f));
+    const VF e = hn::ConvertTo(df, hn::Sub(hn::ShiftRight<23>(bits), hn::Set(di, 127)));
+    const VF f = hn::BitCast(df, hn::Or(hn::And(bits, hn::Set(di, 0x007FFFFF)), hn::Set(di, 0x3F800000)));
+    const VF t = hn::Sub(f, hn::Set(df, 1.0f));
+#endif
     auto p = hn::Set(df, kLnP6);
     p = hn::MulAdd(p, t, hn::Set(df, kLnP5));
     p = hn::MulAdd(p, t, hn::Set(df, kLnP4));
@@ -188,8 +268,9 @@ HWY_INLINE VI logTermLanes(VI m, const int16_t* table) {
     p = hn::MulAdd(p, t, hn::Set(df, kLnP1));
     p = hn::MulAdd(p, t, hn::Set(df, kLnP0));
     const auto lnx = hn::MulAdd(e, hn::Set(df, kLn2), hn::Mul(p, t));
-    // NearestInt rounds to nearest even, as rintf does in the default rounding mode.
-    return hn::NearestInt(hn::Mul(hn::Sub(lnx, hn::Set(df, kLnFullPair)), hn::Set(df, float(kVoxLogScale))));
+    // Rounded to nearest even, as rintf does in the default rounding mode.
+    // Within [-6400, 0].
+    return nearestIntInRange(hn::Mul(hn::Sub(lnx, hn::Set(df, kLnFullPair)), hn::Set(df, float(kVoxLogScale))));
   }
 }
 
@@ -237,7 +318,7 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
     s[j][0] = shiftUpOne(s[j][1], cf, up);
     const auto lower = hn::MaskFromVec(shiftUpOne(hn::VecFromMask(di, obs[j]), cf >= 0 ? -1 : 0, up));
     const auto need = hn::AndNot(lower, obs[j]);
-    if (!hn::AllFalse(di, need)) s[j][0] = hn::IfThenElse(need, bilinearLanes(v, hn::Sub(base[j], d[j][0])), s[j][0]);
+    if (!hn::AllFalse(di, need)) s[j][0] = bilinearLanesMasked(v, s[j][0], need, hn::Sub(base[j], d[j][0]));
     carry[c] = hn::ExtractLane(hn::VecFromMask(di, obs[j]), lanes - 1) ? hn::ExtractLane(s[j][1], lanes - 1) : -1;
     s[j][2] = carryFaces(v, yface + size_t(c) * p.nxp + x0, left, s[j][3], obs[j], hn::Sub(base[j], d[j][1]));
     s[j][4] = carryFaces(v, zface + size_t(c) * p.nxp + x0, left, s[j][5], obs[j], hn::Sub(base[j], d[j][2]));

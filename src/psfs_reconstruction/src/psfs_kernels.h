@@ -7,14 +7,14 @@
 //    (psfs_kernels.cpp) on x86 CPUs with AVX2; Highway's portable target (psfs_face_hwy.cpp)
 //    everywhere else; faceRowScalar the reference. The Highway kernel (issue 17) serves every
 //    target but measures slower than the hand-written ones (16 mm volume, 1 thread, Zen 5
-//    EPYC, 2026-12-07, both with cameras in groups, docs/benchmarks.md): AVX3 4.51 ms against
-//    3.27 ms (1.38x), AVX2 6.25 ms against 5.18 ms (1.21x). Why: Highway 1.0 (Debian 12) has no byte multiply-add
-//    (maddubs), so its column lerp takes ~8 32-bit operations where AVX2 needs 3 and AVX-512's
-//    16-entry weight tables (vpermd) 2; no getexp / getmant for the log term's split; and no
-//    masked gathers. Its 128-bit target without gathers or FMA, SSE4 (the nearest to a NEON core
-//    measurable here), takes 9.05 ms, 1.81x the hand-written AVX2 kernel's 5.05 ms in the same
-//    run (it takes the log term from a table, log_term_table.h); SCALAR 30.4 ms, faceRowScalar
-//    (the reference) 44.7 ms.
+//    EPYC, 2026-12-07 eighth session, medians of per-round ratios, docs/benchmarks.md): AVX3
+//    1.13x the hand-written AVX-512 kernel, AVX2 1.09x the hand-written AVX2 one. It borrows
+//    their x86 steps where Highway 1.0 (Debian 12) has none: the byte multiply-add (maddubs)
+//    of the column lerp, AVX-512's 16-entry weight tables (vpermd) and getexp / getmant,
+//    masked gathers, and conversions without Highway's overflow fix-up; what remains is not
+//    located (no PMU counters on the VM). Its 128-bit target without gathers or FMA, SSE4 (the
+//    nearest to a NEON core measurable here), takes 1.7-1.9x the hand-written AVX2 kernel's
+//    time in the same run (it takes the log term from a table, log_term_table.h); SCALAR ~6x.
 // The plain C++ reference kernels are made of the per-voxel functions of voxel_arithmetic.h,
 // which the CUDA kernels (gpu_psfs_fusion.h) run too: one source for the arithmetic.
 #pragma once
