@@ -8,6 +8,7 @@
 
 #include "cpu_dispatch.h"
 #include "empty_space_bound.h"
+#include "tile_squares.h"
 #include "voxel_projection.h"
 
 #include <Eigen/Core>
@@ -165,72 +166,24 @@ void TermTiles::set(const uint8_t* bytes, size_t stride, int step, int width, in
   clean_ = true;
   for (const uint16_t t : level_[0]) clean_ = clean_ && (t & 0x8000) == 0 && (t & 0x1FF) > 0;
   if (clean_) {
-    for (auto& l : level8_) l.resize(level_[0].size());
+    level8_[0].resize(level_[0].size());
     for (size_t i = 0; i < level_[0].size(); ++i) level8_[0][i] = uint8_t((level_[0][i] & 0x1FF) - 1);
-    for (int l = 1; l < kLevels; ++l) {
-      const int h = 1 << (l - 1);
-      for (int ty = 0; ty < tiles_y; ++ty) {
-        const uint8_t* __restrict r0 = &level8_[l - 1][size_t(ty) * tiles_x];
-        const uint8_t* __restrict r1 = &level8_[l - 1][size_t(std::min(ty + h, tiles_y - 1)) * tiles_x];
-        uint8_t* __restrict out = &level8_[l][size_t(ty) * tiles_x];
-        auto max4 = [&](int tx, int tx2) { return std::max(std::max(r0[tx], r0[tx2]), std::max(r1[tx], r1[tx2])); };
-        int tx = 0;
-        for (; tx + h < tiles_x; ++tx) out[tx] = max4(tx, tx + h);
-        for (; tx < tiles_x; ++tx) out[tx] = max4(tx, tiles_x - 1);
-      }
-    }
+    buildTileSquares(level8_, kLevels, tiles_x, tiles_y, [](uint8_t a, uint8_t b) { return a > b ? a : b; });
     return;
   }
-  // Squares of 2^l x 2^l tiles (top-left tile (tx, ty); clamped at the window's edge): any
-  // rectangle of tiles is the union of a few of them.
-  for (int l = 1; l < kLevels; ++l) {
-    const std::vector<uint16_t>& src = level_[l - 1];
-    std::vector<uint16_t>& dst = level_[l];
-    const int h = 1 << (l - 1);
-    for (int ty = 0; ty < tiles_y; ++ty) {
-      const uint16_t* r0 = &src[size_t(ty) * tiles_x];
-      const uint16_t* r1 = &src[size_t(std::min(ty + h, tiles_y - 1)) * tiles_x];
-      uint16_t* out = &dst[size_t(ty) * tiles_x];
-      for (int tx = 0; tx < tiles_x; ++tx) {
-        const int tx2 = std::min(tx + h, tiles_x - 1);
-        out[tx] = combine(combine(r0[tx], r0[tx2]), combine(r1[tx], r1[tx2]));
-      }
-    }
-  }
+  // Squares of 2^l x 2^l tiles (tile_squares.h): any rectangle of tiles is the union of a few.
+  buildTileSquares(level_, kLevels, tiles_x, tiles_y, combine);
 }
 
 void TermTiles::rectMax(int u0, int v0, int u1, int v1, int* max_byte_out, bool* off_out) const {
   const int a0 = u0 / kTile - tx0, a1 = u1 / kTile - tx0, b0 = v0 / kTile - ty0, b1 = v1 / kTile - ty0;
-  const int side = std::min(a1 - a0, b1 - b0) + 1;
-  const int l = side >= 4 ? 2 : side >= 2 ? 1 : 0;
-  const int step = 1 << l;
   if (clean_) {
-    const uint8_t* t = level8_[l].data();
-    uint8_t r = 0;
-    for (int b = b0;; b += step) {
-      const uint8_t* row = t + size_t(std::min(b, b1 - step + 1)) * tiles_x;
-      for (int a = a0;; a += step) {
-        const int aa = std::min(a, a1 - step + 1);
-        r = std::max(r, row[aa]);
-        if (aa == a1 - step + 1) break;
-      }
-      if (b >= b1 - step + 1) break;
-    }
-    *max_byte_out = r;
+    *max_byte_out = tileSquaresOver(level8_, kLevels, tiles_x, a0, b0, a1, b1, uint8_t(0),
+                                    [](uint8_t a, uint8_t b) { return a > b ? a : b; });
     *off_out = false;
     return;
   }
-  const uint16_t* t = level_[l].data();
-  uint16_t r = pack(-1, false);
-  for (int b = b0;; b += step) {
-    const int bb = std::min(b, b1 - step + 1);
-    for (int a = a0;; a += step) {
-      const int aa = std::min(a, a1 - step + 1);
-      r = combine(r, t[size_t(bb) * tiles_x + aa]);
-      if (aa == a1 - step + 1) break;
-    }
-    if (bb == b1 - step + 1) break;
-  }
+  const uint16_t r = tileSquaresOver(level_, kLevels, tiles_x, a0, b0, a1, b1, pack(-1, false), combine);
   *max_byte_out = int(r & 0x1FF) - 1;
   *off_out = (r & 0x8000) != 0;
 }

@@ -64,7 +64,8 @@ struct TermTiles {
   static uint16_t combine(uint16_t a, uint16_t b) {
     return uint16_t(std::max(a & 0x1FF, b & 0x1FF) | ((a | b) & 0x8000));
   }
-  // [l][ty * tiles_x + tx]: over the tiles [tx, tx + 2^l) x [ty, ty + 2^l) (clamped to the window).
+  // [l][ty * tiles_x + tx]: over the tiles [tx, tx + 2^l) x [ty, ty + 2^l) (clamped to the window;
+  // tile_squares.h).
   std::vector<uint16_t> level_[kLevels];
   // Where every tile has evidence and none lacks it (clean_): the levels' largest bytes alone.
   bool clean_ = false;

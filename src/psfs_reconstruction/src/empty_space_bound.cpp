@@ -9,6 +9,7 @@
 #include <string>
 
 #include "cpu_dispatch.h"
+#include "tile_squares.h"
 #include "volume_fusion.h"
 
 #if defined(__SSE2__)
@@ -122,41 +123,12 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
         off_pixels += !active.empty() ? active.ptr<uint8_t>(v)[u] == 0 : terms[size_t(v) * width + u] > 0;
     absent = off_pixels == size_t(width) * height;
   }
-  for (int l = 1; l < kLevels; ++l) {
-    const int h = 1 << (l - 1);  // the squares of level l - 1 that make one of level l
-    const int nx = tiles_x, ny = tiles_y;
-    for (int ty = 0; ty < ny; ++ty) {
-      const int32_t* __restrict s0 = &bound[l - 1][size_t(ty) * nx];
-      const int32_t* __restrict s1 = &bound[l - 1][size_t(std::min(ty + h, ny - 1)) * nx];
-      int32_t* __restrict d = &bound[l][size_t(ty) * nx];
-      auto max4 = [&](int tx, int tx2) {
-        const int32_t a = s0[tx] > s0[tx2] ? s0[tx] : s0[tx2];
-        const int32_t b = s1[tx] > s1[tx2] ? s1[tx] : s1[tx2];
-        return a > b ? a : b;
-      };
-      int tx = 0;
-      for (; tx + h < nx; ++tx) d[tx] = max4(tx, tx + h);  // no clamp: vectorises
-      for (; tx < nx; ++tx) d[tx] = max4(tx, nx - 1);
-    }
-  }
+  buildTileSquares(bound, kLevels, tiles_x, tiles_y, [](int32_t a, int32_t b) { return a > b ? a : b; });
 }
 
 int32_t TileMaxImage::rectMax(int tx0, int ty0, int tx1, int ty1) const {
-  const int side = std::min(tx1 - tx0, ty1 - ty0) + 1;
-  const int l = side >= 4 ? 2 : side >= 2 ? 1 : 0;
-  const int s = 1 << l;
-  const std::vector<int32_t>& b = bound[l];
-  int32_t m = std::numeric_limits<int32_t>::min();
-  for (int y = ty0;; y += s) {
-    const int yy = std::min(y, ty1 - s + 1);
-    for (int x = tx0;; x += s) {
-      const int xx = std::min(x, tx1 - s + 1);
-      m = std::max(m, b[size_t(yy) * tiles_x + xx]);
-      if (xx == tx1 - s + 1) break;
-    }
-    if (yy == ty1 - s + 1) break;
-  }
-  return m;
+  return tileSquaresOver(bound, kLevels, tiles_x, tx0, ty0, tx1, ty1, std::numeric_limits<int32_t>::min(),
+                         [](int32_t a, int32_t b) { return a > b ? a : b; });
 }
 
 void tileMaxImages(const ViewEvidence& evidence, int threads, std::vector<TileMaxImage>* out) {

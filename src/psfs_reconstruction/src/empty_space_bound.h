@@ -49,7 +49,7 @@ namespace detail {
 // Per 8x8 pixel tile of one camera: the bound's log term of the largest byte of the likelihood's
 // 2x2 minimum (see the file comment), and whether a switched-off pixel lies in it; the same over
 // squares of 2x2 and 4x4 tiles (level l: the square of 2^l tiles whose top-left tile is (tx, ty)),
-// so that any rectangle of tiles is the maximum of a few lookups.
+// so that any rectangle of tiles is the maximum of a few lookups (tile_squares.h).
 struct TileMaxImage {
   static constexpr int kTile = 8;    // pixels per tile side
   static constexpr int kLevels = 3;  // squares of 1, 2 and 4 tiles
