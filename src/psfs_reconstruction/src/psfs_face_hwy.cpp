@@ -270,7 +270,7 @@ HWY_INLINE VI logTermLanes(VI m, const int16_t* table) {
     const auto lnx = hn::MulAdd(e, hn::Set(df, kLn2), hn::Mul(p, t));
     // Rounded to nearest even, as rintf does in the default rounding mode.
     // Within [-6400, 0].
-    return nearestIntInRange(hn::Mul(hn::Sub(lnx, hn::Set(df, kLnFullPair)), hn::Set(df, float(kVoxLogScale))));
+    return intInRange<true>(hn::Mul(hn::Sub(lnx, hn::Set(df, kLnFullPair)), hn::Set(df, float(kVoxLogScale))));
   }
 }
 

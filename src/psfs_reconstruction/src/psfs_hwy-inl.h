@@ -31,32 +31,25 @@ using VI = hn::Vec<DI>;
 using VU = hn::Vec<DU>;
 using VF = hn::Vec<DF>;
 
-// Float to int32 for values that lie in int32's range (NaN excluded): x86's conversion alone,
-// without the fix-up for overflow that Highway's NearestInt / ConvertTo add (4 operations per
-// vector, in the face kernel's log term per camera). The same integers.
+// Float to int32 for values that lie in int32's range (NaN excluded), rounded to nearest even
+// (kNearest) or toward zero: x86's conversion alone, without the fix-up for overflow that
+// Highway's NearestInt / ConvertTo add (4 operations per vector, in the face kernel's log term
+// per camera). The same integers.
+template <bool kNearest>
+HWY_INLINE VI intInRange(VF v) {
 #if HWY_ARCH_X86 && HWY_TARGET != HWY_SCALAR && HWY_TARGET != HWY_EMU128
-HWY_INLINE VI nearestIntInRange(VF v) {
 #if HWY_TARGET <= HWY_AVX3
-  return VI{_mm512_cvtps_epi32(v.raw)};
+  return VI{kNearest ? _mm512_cvtps_epi32(v.raw) : _mm512_cvttps_epi32(v.raw)};
 #elif HWY_TARGET <= HWY_AVX2
-  return VI{_mm256_cvtps_epi32(v.raw)};
+  return VI{kNearest ? _mm256_cvtps_epi32(v.raw) : _mm256_cvttps_epi32(v.raw)};
 #else
-  return VI{_mm_cvtps_epi32(v.raw)};
+  return VI{kNearest ? _mm_cvtps_epi32(v.raw) : _mm_cvttps_epi32(v.raw)};
+#endif
+#else
+  if constexpr (kNearest) return hn::NearestInt(v);
+  return hn::ConvertTo(DI(), v);
 #endif
 }
-HWY_INLINE VI truncateInRange(VF v) {
-#if HWY_TARGET <= HWY_AVX3
-  return VI{_mm512_cvttps_epi32(v.raw)};
-#elif HWY_TARGET <= HWY_AVX2
-  return VI{_mm256_cvttps_epi32(v.raw)};
-#else
-  return VI{_mm_cvttps_epi32(v.raw)};
-#endif
-}
-#else
-HWY_INLINE VI nearestIntInRange(VF v) { return hn::NearestInt(v); }
-HWY_INLINE VI truncateInRange(VF v) { return hn::ConvertTo(DI(), v); }
-#endif
 
 // The camera's log term at each packed centre (PackedUV: u in 1/16 px in the low half, v in
 // the high half, 1/16 px). A 32-bit gather at the term's byte offset, sign-extended from its
@@ -109,7 +102,7 @@ HWY_INLINE void finaliseLanes(const PsfsRowParams& p, VI sum, VI inactive, const
   auto e = hn::Mul(hn::Sub(hn::Zero(df), mean), hn::Set(df, p.exp_scale));
   e = hn::Min(e, hn::Set(df, static_cast<float>(p.exp_table_size - 1)));
   e = hn::Max(e, hn::Zero(df));
-  const VI b = hn::GatherIndex(di, p.exp_table, truncateInRange(e));  // e in [0, size - 1]
+  const VI b = hn::GatherIndex(di, p.exp_table, intInRange<false>(e));  // e in [0, size - 1]
   const VI b_in = hn::Max(b, hn::Set(di, p.t_byte + 1));
   const VI b_out = p.zero_outside ? hn::Zero(di) : hn::Min(b, hn::Set(di, p.t_byte));
   const VI r = hn::IfThenElseZero(valid, hn::IfThenElse(in, b_in, b_out));
