@@ -7,7 +7,7 @@
 // results: the same bytes by construction, one load per lane (255 KiB, int16). A kernel clamps
 // m to [0, kMaxMedianPair] first: below 0 the function's floor at 256 gives table[0] anyway,
 // and a pair above the range (a kNoFace sample) can only be in the lane of a voxel that is not
-// observed, whose term is discarded.
+// observed (its term is discarded) or of a lane past the span's end (never stored).
 #pragma once
 
 #include <cstdint>

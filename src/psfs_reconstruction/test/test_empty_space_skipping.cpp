@@ -304,7 +304,7 @@ TEST(EmptySpaceSkipping, FillingAFullFusionGivesTheSkippingFusionsBytes) {
 // The tiles against brute force: per 8x8 tile the bound of the largest 2x2 minimum (the right
 // and lower neighbours replicated at the border), the squares of 2 and 4 tiles, inactive tiles
 // and the commonest byte (every 4th row), on images whose sides are not multiples of a tile or
-// a vector, with and without a mask.
+// a vector, with and without a mask; and the largest bound over every rectangle of tiles.
 TEST(EmptySpaceSkipping, TileMaxImagesMatchBruteForce) {
   // The bound of byte b: a constant image's only tile.
   std::vector<int32_t> term(256);
@@ -370,6 +370,18 @@ TEST(EmptySpaceSkipping, TileMaxImagesMatchBruteForce) {
               for (int x = tx; x < std::min(t.tiles_x, tx + s); ++x) m = std::max(m, expect[size_t(y) * t.tiles_x + x]);
             ASSERT_EQ(t.bound[l][size_t(ty) * t.tiles_x + tx], m) << what << " level " << l << " tile " << tx << "," << ty;
           }
+      // Every rectangle of tiles (tile_squares.h's walk over the squares): the largest bound of
+      // the tiles it covers.
+      for (int ty0 = 0; ty0 < t.tiles_y; ++ty0)
+        for (int ty1 = ty0; ty1 < t.tiles_y; ++ty1)
+          for (int tx0 = 0; tx0 < t.tiles_x; ++tx0)
+            for (int tx1 = tx0; tx1 < t.tiles_x; ++tx1) {
+              int32_t m = std::numeric_limits<int32_t>::min();
+              for (int y = ty0; y <= ty1; ++y)
+                for (int x = tx0; x <= tx1; ++x) m = std::max(m, expect[size_t(y) * t.tiles_x + x]);
+              ASSERT_EQ(t.rectMax(tx0, ty0, tx1, ty1), m)
+                  << what << " tiles " << tx0 << ".." << tx1 << " x " << ty0 << ".." << ty1;
+            }
       std::vector<int> histogram(256, 0);
       for (int v = 0; v < h; v += 4)
         for (int u = 0; u < w; ++u) ++histogram[px(u, v)];

@@ -175,6 +175,10 @@ TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
   const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm), oddWidthGrid()};
   const std::vector<int64_t> targets = detail::hwyRowTargets();
   ASSERT_FALSE(targets.empty());
+  // What this CPU runs (the AVX-512 steps only where it has AVX-512): said, so a log shows it.
+  std::string names;
+  for (int64_t t : targets) names += std::string(" ") + detail::hwyTargetName(t);
+  std::printf("[ targets  ]%s\n", names.c_str());
   // Cameras in groups of 4 or 2 and a tail of single ones: 8, 7 and 3 cameras.
   for (const size_t num_cameras : {size_t(8), size_t(7), size_t(3)})
   for (const VoxelGrid& grid : grids) {
