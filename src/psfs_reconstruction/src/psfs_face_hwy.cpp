@@ -179,11 +179,27 @@ HWY_INLINE VI bilinearLanesMasked(const KernelView& v, VI src, hn::Mask<DI> need
 #endif
 }
 
-// A chunk's sample offset (du | dv << 16, int16 each) as one int32, du + dv 2^16, so that a
-// 32-bit add or subtract moves both packed coordinates (which stay in [0, 65535]).
-HWY_INLINE uint32_t packedOffset(uint32_t off) {
+// Positions moved by + or - a chunk's sample offset (du | dv << 16, int16 each). The positions'
+// halves stay in [0, 65535], so one 16-bit add or subtract moves both coordinates, as in the
+// hand-written kernels (laneOffset: the offset as the table stores it). SCALAR, whose one lane
+// cannot be split in halves, adds the offset as one int32, du + dv 2^16 (the same positions).
+#if HWY_TARGET == HWY_SCALAR
+HWY_INLINE uint32_t laneOffset(uint32_t off) {
   return (off & 0xFFFF0000u) + static_cast<uint32_t>(static_cast<int32_t>(static_cast<int16_t>(off & 0xFFFFu)));
 }
+HWY_INLINE VU plusOffset(VU s, VU d) { return hn::Add(s, d); }
+HWY_INLINE VU minusOffset(VU s, VU d) { return hn::Sub(s, d); }
+#else
+HWY_INLINE uint32_t laneOffset(uint32_t off) { return off; }
+HWY_INLINE VU plusOffset(VU s, VU d) {
+  const hn::Repartition<uint16_t, DU> d16;
+  return hn::BitCast(DU(), hn::Add(hn::BitCast(d16, s), hn::BitCast(d16, d)));
+}
+HWY_INLINE VU minusOffset(VU s, VU d) {
+  const hn::Repartition<uint16_t, DU> d16;
+  return hn::BitCast(DU(), hn::Sub(hn::BitCast(d16, s), hn::BitCast(d16, d)));
+}
+#endif
 
 // The offsets along `axis` of the chunk(s) under the vector: one chunk of 8 voxels, or two
 // (lanes 0-7 and 8-15) for 16 lanes.
@@ -193,11 +209,11 @@ HWY_INLINE hn::Vec<D> chunkOffsets(D d, const uint32_t* off0, const uint32_t* of
 #if HWY_TARGET != HWY_SCALAR  // which has no Combine
   if constexpr (hn::MaxLanes(D()) > ProjectionTable::kChunk) {
     const hn::Half<D> dh;
-    return hn::Combine(d, hn::Set(dh, packedOffset(off1[axis])), hn::Set(dh, packedOffset(off0[axis])));
+    return hn::Combine(d, hn::Set(dh, laneOffset(off1[axis])), hn::Set(dh, laneOffset(off0[axis])));
   }
 #endif
   (void)off1;
-  return hn::Set(d, packedOffset(off0[axis]));
+  return hn::Set(d, laneOffset(off0[axis]));
 }
 
 HWY_INLINE void cswap(VI& a, VI& b) {
@@ -294,9 +310,16 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
   const bool whole = left >= lanes;
   const VI zero = hn::Zero(di), no_ev = hn::Set(di, kVoxNoEvidence);
   const VU pad = hn::Set(du, static_cast<uint32_t>(kPad16) * 0x10001u);  // both coordinates
-  VU uv[N], base[N], d[N][3];
+  VU uv[N], base[N];
   VI s[N][6];
   hn::Mask<DI> obs[N];
+  // The chunks' offsets: held in registers with 16 lanes (AVX-512 has 32 of them, and two
+  // chunks' offsets take a combine), else broadcast where they are used (AVX2: 12 more for 4
+  // cameras spill on its 16 registers; 1.07x -> 1.03x the hand-written kernel's time).
+  constexpr bool kHoldOffsets = hn::MaxLanes(DI()) >= 16;
+  const uint32_t* off0[N];
+  const uint32_t* off1[N];
+  VU held[N][3];
   for (int j = 0; j < N; ++j) {
     const int c = c0 + j;
     const uint32_t* src = centres + size_t(c) * p.nxp + x0;
@@ -304,12 +327,18 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
     obs[j] = hn::RebindMask(di, hn::Ne(uv[j], hn::Set(du, p.views[c].not_observed)));
     if (!whole) obs[j] = hn::And(obs[j], hn::FirstN(di, left));
     base[j] = hn::Add(uv[j], pad);
-    const uint32_t* off0 = offsets + (size_t(c) * p.chunks + chunk) * 3;
-    const uint32_t* off1 = left > ProjectionTable::kChunk ? off0 + 3 : off0;
-    for (int a = 0; a < 3; ++a) d[j][a] = chunkOffsets(du, off0, off1, a);
+    off0[j] = offsets + (size_t(c) * p.chunks + chunk) * 3;
+    off1[j] = left > ProjectionTable::kChunk ? off0[j] + 3 : off0[j];
   }
+  if constexpr (kHoldOffsets)
+    for (int j = 0; j < N; ++j)
+      for (int a = 0; a < 3; ++a) held[j][a] = chunkOffsets(du, off0[j], off1[j], a);
+  auto d = [&](int j, int a) {
+    if constexpr (kHoldOffsets) return held[j][a];
+    return chunkOffsets(du, off0[j], off1[j], a);
+  };
   for (int a = 0; a < 3; ++a)
-    for (int j = 0; j < N; ++j) s[j][2 * a + 1] = bilinearLanes(p.views[c0 + j], hn::Add(base[j], d[j][a]));
+    for (int j = 0; j < N; ++j) s[j][2 * a + 1] = bilinearLanes(p.views[c0 + j], plusOffset(base[j], d(j, a)));
   for (int j = 0; j < N; ++j) {
     const int c = c0 + j;
     const KernelView& v = p.views[c];
@@ -318,10 +347,10 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
     s[j][0] = shiftUpOne(s[j][1], cf, up);
     const auto lower = hn::MaskFromVec(shiftUpOne(hn::VecFromMask(di, obs[j]), cf >= 0 ? -1 : 0, up));
     const auto need = hn::AndNot(lower, obs[j]);
-    if (!hn::AllFalse(di, need)) s[j][0] = bilinearLanesMasked(v, s[j][0], need, hn::Sub(base[j], d[j][0]));
+    if (!hn::AllFalse(di, need)) s[j][0] = bilinearLanesMasked(v, s[j][0], need, minusOffset(base[j], d(j, 0)));
     carry[c] = hn::ExtractLane(hn::VecFromMask(di, obs[j]), lanes - 1) ? hn::ExtractLane(s[j][1], lanes - 1) : -1;
-    s[j][2] = carryFaces(v, yface + size_t(c) * p.nxp + x0, left, s[j][3], obs[j], hn::Sub(base[j], d[j][1]));
-    s[j][4] = carryFaces(v, zface + size_t(c) * p.nxp + x0, left, s[j][5], obs[j], hn::Sub(base[j], d[j][2]));
+    s[j][2] = carryFaces(v, yface + size_t(c) * p.nxp + x0, left, s[j][3], obs[j], minusOffset(base[j], d(j, 1)));
+    s[j][4] = carryFaces(v, zface + size_t(c) * p.nxp + x0, left, s[j][5], obs[j], minusOffset(base[j], d(j, 2)));
   }
   VI tm[N];
   for (int j = 0; j < N; ++j) tm[j] = logTermLanes(middlePair6Lanes(s[j]), log_table);
