@@ -7,18 +7,17 @@
 //
 // Highway 1.0 has neither x86's byte multiply-adds (maddubs) nor masked gathers, so:
 //  * the bilinear lerp runs in 32-bit lanes on packed 16-bit pairs (lerpLanes) on every
-//    target, SCALAR too; x86 targets (SSSE3 up) take the hand-written kernels' steps instead:
-//    the index and the row lerp with pmaddwd, the column lerps with pmaddubsw, the weights
-//    from 16-entry tables on AVX-512;
+//    target, SCALAR too; x86 targets (SSSE3 up) take x86's own steps instead (as the
+//    hand-written AVX2 and AVX-512 kernels this file replaced did): the index and the row lerp
+//    with pmaddwd, the column lerps with pmaddubsw, the weights from 16-entry tables on AVX-512;
 //  * a face sampled from the upper voxel gathers only the lanes that need it on AVX2 and
 //    AVX-512 (masked gathers, bilinearLanesMasked); elsewhere all lanes (they all stay inside
-//    the pair image's replicated border, like the hand-written kernels' unmasked + face
-//    gathers) and keeps those.
+//    the pair image's replicated border, as do the unmasked + face gathers) and keeps those.
 // Such target-specific steps give the same integers as the portable ones (the tests compare
 // every target's bytes with faceRowScalar's).
 //
-// It serves the portable path; on x86 with AVX2 the hand-written kernels stay the default, as
-// they measure faster (psfs_kernels.h, docs/benchmarks.md).
+// It is the multi-projection kernel on every CPU (psfs_kernels.h: within 3 % of the
+// hand-written x86 kernels it replaced), and plusFacesOfRow's vector path.
 //
 // Highway re-includes this file once per target (foreach_target.h).
 #ifndef HWY_DISABLED_TARGETS
@@ -74,7 +73,7 @@ HWY_INLINE VI pairMulAdd(VU x, VU w) {
 // (a, c, b, d) = (top left, bottom left, top right, bottom right) times bytes (16 - fv, fv,
 // 16 - fv, fv) give (left | right << 16), the values of the portable lerp below. AVX-512 takes
 // the weights from 16-entry tables (vpermd reads only the low 4 bits of each index: fv is bits
-// 16-19 of s), as the hand-written kernel did.
+// 16-19 of s).
 HWY_INLINE VU columnLerpX86(VU q, VU s) {
 #if HWY_TARGET <= HWY_AVX3
   const __m512i wv_table = _mm512_setr_epi32(
@@ -180,9 +179,9 @@ HWY_INLINE VI bilinearLanesMasked(const KernelView& v, VI src, hn::Mask<DI> need
 }
 
 // Positions moved by + or - a chunk's sample offset (du | dv << 16, int16 each). The positions'
-// halves stay in [0, 65535], so one 16-bit add or subtract moves both coordinates, as in the
-// hand-written kernels (laneOffset: the offset as the table stores it). SCALAR, whose one lane
-// cannot be split in halves, adds the offset as one int32, du + dv 2^16 (the same positions).
+// halves stay in [0, 65535], so one 16-bit add or subtract moves both coordinates
+// (laneOffset: the offset as the table stores it). SCALAR, whose one lane cannot be split in
+// halves, adds the offset as one int32, du + dv 2^16 (the same positions).
 #if HWY_TARGET == HWY_SCALAR
 HWY_INLINE uint32_t laneOffset(uint32_t off) {
   return (off & 0xFFFF0000u) + static_cast<uint32_t>(static_cast<int32_t>(static_cast<int16_t>(off & 0xFFFFu)));
@@ -297,9 +296,9 @@ HWY_INLINE VI shiftUpOne(VI v, int32_t first, const Indices& up) {
   return hn::IfThenElse(hn::FirstN(di, 1), hn::Set(di, first), hn::TableLookupLanes(v, up));
 }
 
-// N cameras' terms for the lanes from x0, stage by stage across the cameras (as the
-// hand-written kernels do: each camera's chain of index, gather, lerp, median and log is long
-// and serial, and interleaving a group's chains keeps more gathers in flight).
+// N cameras' terms for the lanes from x0, stage by stage across the cameras: each camera's chain
+// of index, gather, lerp, median and log is long and serial, and interleaving a group's chains
+// keeps more gathers in flight.
 template <int K, int N, class Indices>
 HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, int left, const uint32_t* centres,
                             const uint32_t* offsets, uint16_t* yface, uint16_t* zface, int32_t* carry,
@@ -315,7 +314,7 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
   hn::Mask<DI> obs[N];
   // The chunks' offsets: held in registers with 16 lanes (AVX-512 has 32 of them, and two
   // chunks' offsets take a combine), else broadcast where they are used (AVX2: 12 more for 4
-  // cameras spill on its 16 registers; 1.07x -> 1.03x the hand-written kernel's time).
+  // cameras spill on its 16 registers; 1.07x -> 1.03x the hand-written AVX2 kernel's time).
   constexpr bool kHoldOffsets = hn::MaxLanes(DI()) >= 16;
   const uint32_t* off0[N];
   const uint32_t* off1[N];
@@ -362,7 +361,7 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
   }
 }
 
-// Cameras per group: 2 for 16 lanes (as faceCameras512), else 4 (as faceCamerasAvx2); one on
+// Cameras per group: 2 for 16 lanes, else 4 (as measured for the hand-written kernels); one on
 // the one-lane and emulated targets, where it measured 7 % slower (Zen 5, BM_PsfsFace: AVX2
 // -8 %, AVX3 -4 %, SSE4 -2 % with groups).
 #if HWY_TARGET == HWY_SCALAR || HWY_TARGET == HWY_EMU128
@@ -411,6 +410,40 @@ PsfsFaceRowFn FaceRowKernel(int k) {
   return byOcclusion(k, [&](auto K) -> PsfsFaceRowFn { return &faceRowHwy<decltype(K)::value>; });
 }
 
+// plusFacesOfRow (psfs_kernels.h) for x in [x_begin, x_end), whole chunks: each camera's + face
+// along `axis` of every observed voxel, kNoFace for the others (whose lanes are not sampled
+// where gathers can be masked; elsewhere their positions stay inside the pair image's border).
+void PlusFacesRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
+                  const uint32_t* offsets, int axis, uint16_t* faces, int x_begin, int x_end) {
+  const DI di;
+  const DU du;
+  const hn::Rebind<uint16_t, DI> d16;
+  const int lanes = static_cast<int>(hn::Lanes(di));
+  const int chunks = nxp / ProjectionTable::kChunk;
+  const VU pad = hn::Set(du, static_cast<uint32_t>(kPad16) * 0x10001u);
+  const VI nf = hn::Set(di, kNoFace);
+  for (int c = 0; c < num_cameras; ++c) {
+    const KernelView& v = views[c];
+    for (int x0 = x_begin; x0 < x_end; x0 += lanes) {
+      const int left = x_end - x0;
+      const bool whole = left >= lanes;
+      const uint32_t* src = centres + size_t(c) * nxp + x0;
+      const VU uv = whole ? hn::LoadU(du, src) : hn::MaskedLoad(hn::FirstN(du, left), du, src);
+      auto obs = hn::RebindMask(di, hn::Ne(uv, hn::Set(du, v.not_observed)));
+      if (!whole) obs = hn::And(obs, hn::FirstN(di, left));
+      const uint32_t* off0 = offsets + (size_t(c) * chunks + x0 / ProjectionTable::kChunk) * 3;
+      const uint32_t* off1 = left > ProjectionTable::kChunk ? off0 + 3 : off0;
+      const VI f = bilinearLanesMasked(v, nf, obs, plusOffset(hn::Add(uv, pad), chunkOffsets(du, off0, off1, axis)));
+      uint16_t* dst = faces + size_t(c) * nxp + x0;
+      if (whole) {
+        hn::StoreU(hn::DemoteTo(d16, f), d16, dst);
+      } else {
+        hn::BlendedStore(hn::DemoteTo(d16, f), hn::FirstN(d16, static_cast<size_t>(left)), d16, dst);
+      }
+    }
+  }
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace detail
 }  // namespace psfs
@@ -421,10 +454,13 @@ namespace psfs {
 namespace detail {
 
 HWY_EXPORT(FaceRowKernel);
+HWY_EXPORT(PlusFacesRow);
 
 PsfsFaceRowFn hwyFaceRowKernel(int64_t target, int k) {
   return HWY_DISPATCH_TABLE(FaceRowKernel)[hwyDispatchIndex(target)](k);
 }
+
+PlusFacesFn hwyPlusFacesKernel(int64_t target) { return HWY_DISPATCH_TABLE(PlusFacesRow)[hwyDispatchIndex(target)]; }
 
 }  // namespace detail
 }  // namespace psfs

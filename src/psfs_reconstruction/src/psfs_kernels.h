@@ -3,18 +3,15 @@
 //  * Single projection (also the footprint levels and the hand sub-volumes): one Google
 //    Highway source for every instruction set (psfs_row_hwy.cpp), checked against the plain
 //    C++ reference in psfs_kernels.cpp.
-//  * Multi-projection (the shared face samples): hand-written AVX-512 and AVX2 kernels
-//    (psfs_kernels.cpp) on x86 CPUs with AVX2; Highway's portable target (psfs_face_hwy.cpp)
-//    everywhere else; faceRowScalar the reference. The Highway kernel (issue 17) serves every
-//    target but measures slower than the hand-written ones (16 mm volume, 1 thread, Zen 5
-//    EPYC, 2026-12-07 eighth session, medians of per-round ratios, docs/benchmarks.md): AVX3
-//    1.13x the hand-written AVX-512 kernel, AVX2 1.09x the hand-written AVX2 one. It borrows
-//    their x86 steps where Highway 1.0 (Debian 12) has none: the byte multiply-add (maddubs)
-//    of the column lerp, AVX-512's 16-entry weight tables (vpermd) and getexp / getmant,
-//    masked gathers, and conversions without Highway's overflow fix-up; what remains is not
-//    located (no PMU counters on the VM). Its 128-bit target without gathers or FMA, SSE4 (the
-//    nearest to a NEON core measurable here), takes 1.7-1.9x the hand-written AVX2 kernel's
-//    time in the same run (it takes the log term from a table, log_term_table.h); SCALAR ~6x.
+//  * Multi-projection (the shared face samples): one Google Highway source too
+//    (psfs_face_hwy.cpp), faceRowScalar the reference. Until 2026-12-07 x86 ran hand-written
+//    AVX-512 and AVX2 kernels; the Highway kernel took their steps where Highway 1.0 lacks them
+//    (psfs_face_hwy.cpp) and measured within 3 % of them (16 mm volume, 1 thread, Zen 5 EPYC,
+//    medians of per-round ratios, docs/benchmarks.md: AVX3 1.03x the AVX-512 kernel, AVX2
+//    1.03x the AVX2 one), so they were retired (issue 17: one kernel source). Its 128-bit
+//    target without gathers or FMA, SSE4 (the nearest to a NEON core measurable here), takes
+//    1.7x the AVX2 kernel's time in the same run (it takes the log term from a table,
+//    log_term_table.h); SCALAR ~6x.
 // The plain C++ reference kernels are made of the per-voxel functions of voxel_arithmetic.h,
 // which the CUDA kernels (gpu_psfs_fusion.h) run too: one source for the arithmetic.
 #pragma once
@@ -109,7 +106,7 @@ PsfsFaceRowFn selectPsfsFaceRow(int k, bool vector);
 // The Highway face kernels (psfs_face_hwy.cpp), for the targets of hwyRowTargets().
 PsfsFaceRowFn hwyFaceRowKernel(int64_t target, int k);
 // Tests and benchmarks: selectPsfsFaceRow returns this kernel from now on (0: back to normal;
-// -1: faceRowScalar, the reference; -2: the default selection, i.e. the hand-written x86 kernels;
+// -1: faceRowScalar, the reference; -2: the default selection (Highway's best allowed target);
 // else this Highway target's).
 void forceFaceRowKernelForTest(int64_t target);
 
@@ -119,6 +116,11 @@ void forceFaceRowKernelForTest(int64_t target);
 // row below.
 void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
                     const uint32_t* offsets, int axis, uint16_t* faces, int x_begin = 0, int x_end = -1);
+// The Highway plusFacesOfRow for a target of hwyRowTargets() (x range: whole chunks, checked by
+// plusFacesOfRow, which takes the reference's loop when the scalar kernels are forced).
+using PlusFacesFn = void (*)(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,
+                             const uint32_t* offsets, int axis, uint16_t* faces, int x_begin, int x_end);
+PlusFacesFn hwyPlusFacesKernel(int64_t target);
 // The +x faces of voxel x of one row per camera into carry[c] (-1 where it is not observed):
 // RowSpan::x_carry of a span that starts at x + 1.
 void plusXFaces(const KernelView* views, int num_cameras, int nxp, const uint32_t* centres,

@@ -170,9 +170,9 @@ SpanShapes spanShapes(const ProjectionTable& table, const PsfsOptions& skipping,
   return n;
 }
 
-// Every face kernel (the reference, every Highway target this CPU runs, the hand-written AVX-512
-// and AVX2 ones) computes spans of a row and re-samples the carried faces the same way after a
-// skipped chunk (plusFacesOfRow's AVX-512, AVX2 and portable branches through the switches); a grid whose
+// Every face kernel (the reference, every Highway target this CPU runs, the default selection)
+// computes spans of a row and re-samples the carried faces the same way after a skipped chunk
+// (plusFacesOfRow's Highway and portable branches through the switches); a grid whose
 // sides are not multiples of the cell or the kernels' vectors; the layers under a floor (0
 // whatever is skipped); stored and on-the-fly tables.
 TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
@@ -183,7 +183,7 @@ TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
   to.multi_projection = true;
   ProjectionTableOptions fly = to;
   fly.storage = TableStorage::kOnTheFly;
-  // -1: the reference, -2: the hand-written x86 kernels, > 0: a Highway target.
+  // -1: the reference, -2: the default selection, > 0: a Highway target.
   std::vector<int64_t> kernels = {-1, -2};
   for (int64_t t : detail::hwyRowTargets()) kernels.push_back(t);
   for (const VoxelGrid& g : {referenceGrid(Resolution::k16mm), odd}) {
@@ -215,7 +215,7 @@ TEST(EmptySpaceSkipping, EveryKernelOddGridsAndAFloor) {
     for (int64_t kernel : kernels)
       for (int mode : {0, 1, 2}) {  // the CPU's best, the AVX2 switch, the scalar switch
         const bool avx2 = mode == 1, scalar = mode == 2;
-        if (avx2 && kernel != -2) continue;  // the switch picks among the hand-written kernels
+        if (avx2 && kernel != -2) continue;  // the switch changes the default selection only
         if (scalar && kernel != -1) continue;  // the reference with plusFacesOfRow's portable branch
         for (double floor_z : {-std::numeric_limits<double>::infinity(), 0.1}) {
           detail::forceFaceRowKernelForTest(kernel);

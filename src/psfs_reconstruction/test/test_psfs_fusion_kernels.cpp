@@ -47,7 +47,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
   const std::vector<ViewImage> all_views = test::twoSpheresWithMaskedView(rig.cameras);
   const auto all_cams = partlyObservingCameras();
   const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm), oddWidthGrid()};
-  // The face kernels take the cameras in groups (4, 2, 1 on AVX2; 2, 1 on AVX-512): 7 and 3
+  // The face kernels take the cameras in groups (4 then 1 on AVX2; 2 then 1 on AVX-512): 7 and 3
   // cameras take every tail.
   for (const size_t num_cameras : {size_t(8), size_t(7), size_t(3)})
   for (const VoxelGrid& grid : grids)
@@ -150,13 +150,15 @@ TEST(PsfsFusion, EveryHighwayRowTargetMatchesTheReference) {
 // On a CPU without AVX2 (an older x86, ARM) the callers' `vector` is false; the Highway kernels
 // must still take the CPU's best target there (SSE4, NEON), and only a forced scalar run the
 // portable one.
+// With it, both kernels are Highway's best target the switches allow.
 TEST(PsfsFusion, WithoutAvx2TheHighwayKernelsTakeTheBestTarget) {
   const bool was_forced = scalarKernelsForced();  // TABLETOP_SIMD=scalar
   forceScalarKernels(false);
   const int64_t best = detail::hwyRowTarget(true, avx512KernelsActive());
   const int64_t portable = detail::hwyRowTarget(false, false);
   EXPECT_EQ(detail::selectPsfsRow(1, false), detail::hwyRowKernel(best, 1));
-  EXPECT_EQ(detail::selectPsfsFaceRow(1, false), detail::hwyFaceRowKernel(detail::hwyRowTarget(true, false), 1));
+  EXPECT_EQ(detail::selectPsfsFaceRow(1, false), detail::hwyFaceRowKernel(best, 1));
+  EXPECT_EQ(detail::selectPsfsFaceRow(1, true), detail::hwyFaceRowKernel(best, 1));
   forceScalarKernels(true);
   EXPECT_EQ(detail::selectPsfsRow(1, false), detail::hwyRowKernel(portable, 1));
   EXPECT_EQ(detail::selectPsfsFaceRow(1, false), detail::hwyFaceRowKernel(portable, 1));
@@ -164,7 +166,7 @@ TEST(PsfsFusion, WithoutAvx2TheHighwayKernelsTakeTheBestTarget) {
 }
 
 // The multi-projection (face) kernel has one Highway source too: every compiled target writes
-// the bytes of faceRowScalar on the cases the hand-written kernels are checked on above (a
+// the bytes of faceRowScalar on the cases the default kernels are checked on above (a
 // masked view, a camera that sees part of the grid, a row whose last 16-lane step holds one
 // chunk), for every occlusion tolerance, with zero_outside_hull, and with thread splits whose
 // slabs start inside the grid (their first faces come from plusFacesOfRow).

@@ -3,10 +3,9 @@
 //  * the single-projection row kernel (also footprint levels and hand sub-volumes) is one Google
 //    Highway source, dispatched at run time to the best target the CPU has (AVX-512, AVX2, SSE4
 //    on x86; NEON on ARM), or to Highway's portable target when the scalar kernels are forced;
-//  * the multi-projection (face) kernels are hand-written AVX-512 and AVX2 code on x86 CPUs with
-//    AVX2 (measured faster than their Highway version, psfs_kernels.h), else the Highway one.
-// The x86 copies are compiled with function-level target attributes, so the package needs no
-// -march flag and still runs on any x86-64 (or other) CPU.
+//  * the multi-projection (face) kernel is one Highway source too, dispatched the same way.
+// Highway compiles each target's copy with function-level target attributes, so the package
+// needs no -march flag and still runs on any x86-64 (or other) CPU.
 #pragma once
 
 #include <cstddef>
