@@ -133,7 +133,7 @@ void BM_Psfs(benchmark::State& st) {
               (table.precomputed() ? ", stored table" : ", projected on the fly") +
               (st.range(2) ? ", scalar"
                            : avx512KernelsActive() ? ", AVX-512"
-                                                   : (avx2Available() ? ", AVX2" : ", scalar (no AVX2)")));
+                                                   : (avx2Available() ? ", AVX2" : ", no AVX2: Highway's best target")));
 }
 BENCHMARK(BM_Psfs)
     ->ArgsProduct({{16, 8}, {1, 2}, {0}})
@@ -184,7 +184,7 @@ void BM_PsfsFace(benchmark::State& st) {
   detail::forceFaceRowKernelForTest(0);
   st.counters["voxels_in"] = static_cast<double>(countAbove(out, thresholdByte(fusion.options().threshold)));
   st.SetLabel(kernel == 0 ? std::string("default, Highway ") + detail::hwyTargetName(detail::hwyRowTarget(
-                                                                   true, avx512KernelsActive()))
+                                                                   !scalarKernelsForced(), avx512KernelsActive()))
               : kernel == 2 ? std::string("faceRowScalar")
                             : std::string("Highway ") + detail::hwyTargetName(hwy_target));
 }

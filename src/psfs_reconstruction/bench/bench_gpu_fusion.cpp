@@ -78,7 +78,11 @@ int run(int frames) {
   single.set(views, false);
   bilinear.set(views, true);
   std::printf("CPU: %d OpenMP threads, %s kernels; %d frames per case, median\n", omp_get_max_threads(),
-              avx512KernelsActive() ? "AVX-512" : avx2Available() ? "AVX2" : "scalar", frames);
+              avx512KernelsActive() ? "AVX-512"
+              : avx2Available()     ? "AVX2"
+              : scalarKernelsForced() ? "scalar"
+                                      : "no AVX2: Highway SSE4/NEON",
+              frames);
   std::printf("%-44s %9s %9s %8s | %7s %7s %7s %7s | %9s %6s %s\n", "volume", "CPU ms", "GPU ms", "speedup",
               "upload", "project", "fuse", "readbk", "kernel GB/s", "%peak", "bytes");
 

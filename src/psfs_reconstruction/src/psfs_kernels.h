@@ -41,9 +41,10 @@ struct RowSpan {
 // span's last chunk masked, never past span.end).
 using PsfsRowFn = void (*)(const PsfsRowParams&, const uint32_t* centres, uint8_t* out, const RowSpan& span);
 
-// k = occlusion tolerance (0..4). `vector`: the best Highway target the CPU and the
-// TABLETOP_SIMD / force*Kernels() switches allow; else Highway's portable target (SCALAR with
-// GCC < 12.3, else EMU128).
+// k = occlusion tolerance (0..4). The best Highway target the CPU and the TABLETOP_SIMD /
+// force*Kernels() switches allow, whatever `vector` says (false on a CPU without AVX2, where
+// that is SSE4 or NEON); Highway's portable target (SCALAR with GCC < 12.3, else EMU128) only
+// when the scalar kernels are forced.
 PsfsRowFn selectPsfsRow(int k, bool vector);
 
 // The Highway row kernels (psfs_row_hwy.cpp). Targets are Highway's bits (HWY_AVX2, ...).

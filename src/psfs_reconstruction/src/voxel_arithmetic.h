@@ -1,8 +1,8 @@
 // Private: the per-voxel arithmetic of foreground-class pSfS, written once for the CPU's
 // reference kernels (psfs_kernels.cpp: rowScalar, faceRowScalar), the host emulation of the GPU
-// (volume_fusion_host.cpp) and the CUDA kernels (cuda/volume_fusion.cu). The AVX2, AVX-512 and
-// Highway kernels do the same integer and float operations lane by lane, so every path writes
-// the same bytes.
+// (volume_fusion_host.cpp) and the CUDA kernels (cuda/volume_fusion.cu). The Highway kernels
+// (every instruction set) do the same integer and float operations lane by lane, so every
+// path writes the same bytes.
 //  * per camera: the term of a voxel (single projection: the pixel's log term; multi-projection:
 //    the log of the median of its 6 face samples, each a bilinear sample of the likelihood);
 //  * per voxel: the sum of the terms, the count of observing views and the K lowest terms,
@@ -89,7 +89,8 @@ PSFS_HD int32_t centreTerm(const KernelView& v, uint32_t uv) { return v.terms[pi
 
 // ---- multi-projection: face samples --------------------------------------------------------
 // Bilinear sample at padded fixed-point position (su, sv) (1/16 px, origin at pixel -kQuadPad):
-// the same integer arithmetic as maddubs + madd in the AVX2 kernel. Result in [0, 255 * 256].
+// the same integer arithmetic as maddubs + madd in the Highway kernel's x86 targets. Result in
+// [0, 255 * 256].
 PSFS_HD int32_t bilinear(const KernelView& v, int32_t su, int32_t sv) {
   const int32_t u0 = su >> 4, fu = su & 15, v0 = sv >> 4, fv = sv & 15;
   const uint16_t* q = v.pairs + v0 * v.quad_stride + u0;
@@ -156,7 +157,8 @@ PSFS_HD int32_t voxelMedianPair(const KernelView& v, uint32_t uv, const uint32_t
 // gather costs more than these dozen operations): m = 2^e f, f in [1, 2), t = f - 1,
 // ln f = t P(t) with P the degree-6 least-squares fit of ln(1 + t) / t on Chebyshev nodes
 // (|error| < 3e-7 in float, 3e-4 of a fixed-point step; no division, unlike the atanh series).
-// Same float operations (with FMA) as logTermAvx2 and logTerm512, so all give the same bytes.
+// Same float operations (with FMA) as the Highway kernel's logTermLanes (targets without FMA
+// take this function's values from a table, log_term_table.h), so all give the same bytes.
 constexpr float kLn2 = 0.693147180559945f;
 constexpr float kLnFullPair = 11.779591f;  // ln(2 * 255 * 256) = ln 130560
 constexpr float kLnP0 = 0.999978516f, kLnP1 = -0.499423297f, kLnP2 = 0.327937181f,

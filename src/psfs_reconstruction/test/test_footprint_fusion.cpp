@@ -170,7 +170,7 @@ TEST(FootprintTable, LevelsFollowTheProjectedVoxelSize) {
 }
 
 TEST(FootprintFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
-  if (!avx2Available()) GTEST_SKIP() << "no AVX2 on this CPU: only the scalar kernels exist";
+  if (!avx2Available()) GTEST_SKIP() << "no AVX2 on this CPU: the AVX2 and AVX-512 targets cannot run here";
   const auto rig = tabletop_capture::makeDefaultRig();
   std::vector<ViewImage> views = test::twoSpheresWithMaskedView(rig.cameras);
   const VoxelGrid grids[2] = {referenceGrid(Resolution::k16mm), cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 37)};

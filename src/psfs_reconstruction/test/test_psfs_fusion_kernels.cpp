@@ -41,7 +41,8 @@ VoxelGrid oddWidthGrid() { return cubeGrid(Eigen::Vector3d(0.0, 0.0, 0.3), 0.6, 
 
 TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
   if (!avx2Available()) {
-    GTEST_SKIP() << "no AVX2 on this CPU: only the scalar kernels exist";
+    GTEST_SKIP() << "no AVX2 on this CPU: the AVX2 and AVX-512 targets cannot run here (every target it has is "
+                    "compared with the reference in EveryHighway*TargetMatchesTheReference)";
   }
   const auto rig = tabletop_capture::makeDefaultRig();
   const std::vector<ViewImage> all_views = test::twoSpheresWithMaskedView(rig.cameras);
@@ -68,7 +69,7 @@ TEST(PsfsFusion, ScalarAndVectorKernelsGiveIdenticalBytes) {
       PsfsFusion(o).fuse(table, ev, &vec);  // AVX-512 where the CPU has it, else AVX2
       forceAvx2Kernels(true);
       PsfsFusion(o).fuse(table, ev, &vec2);
-      {  // layers split over 3 threads: slabs that start inside the grid (plusFacesOfRow's AVX2 path)
+      {  // layers split over 3 threads: slabs that start inside the grid (plusFacesOfRow's vector path)
         PsfsOptions o3 = o;
         o3.threads = 3;
         ProbabilityVolume vec2_3;
@@ -215,6 +216,52 @@ TEST(PsfsFusion, EveryHighwayFaceTargetMatchesTheReference) {
         EXPECT_GT(countAbove(ref, thresholdByte(o.threshold)), 100u) << "the spheres are in the hull";
       }
   }
+}
+
+// plusFacesOfRow's vector path is Highway's PlusFacesRow at the CPU's best target: every target
+// this CPU runs (those a CPU without AVX2 would run too) writes the reference loop's bytes (the
+// scalar switch's path) and nothing outside the range, for every axis, on rows of 5 chunks
+// (a 16-lane step over one chunk) with a camera that sees only part of the grid, over ranges
+// that start and end at odd chunks.
+TEST(PsfsFusion, EveryHighwayPlusFacesTargetMatchesTheReference) {
+  const auto cams = partlyObservingCameras();
+  const std::vector<ViewImage> views = test::twoSpheresWithMaskedView(tabletop_capture::makeDefaultRig().cameras);
+  ProjectionTableOptions to;
+  to.multi_projection = true;
+  const ProjectionTable table(oddWidthGrid(), cams, to);
+  ViewEvidence ev;
+  ev.set(views, true);
+  const std::vector<detail::KernelView> kv = detail::kernelViews(ev);
+  const int C = table.numCameras(), nxp = table.paddedRowLength(), chunks = table.chunksPerRow();
+  ASSERT_EQ(chunks % 2, 1) << "the grid's rows must hold an odd number of chunks";
+  const size_t rows = size_t(table.grid().dims.y()) * table.grid().dims.z();
+  const bool was_forced = scalarKernelsForced();
+  std::vector<uint32_t> cs(table.centreScratchSize()), os(table.offsetScratchSize());
+  size_t observed = 0, unobserved = 0;
+  const int ranges[5][2] = {{0, chunks}, {1, chunks}, {0, chunks - 1}, {1, 2}, {3, chunks}};
+  for (size_t row = 0; row < rows; row += 5) {
+    const uint32_t* cen = table.rowCentres(row, cs.data());
+    const uint32_t* off = table.rowOffsets(row, os.data());
+    for (int axis = 0; axis < 3; ++axis)
+      for (const auto& r : ranges) {
+        const int x0 = r[0] * ProjectionTable::kChunk, x1 = r[1] * ProjectionTable::kChunk;
+        std::vector<uint16_t> ref(size_t(C) * nxp + 16, uint16_t(0x1234));
+        forceScalarKernels(true);
+        detail::plusFacesOfRow(kv.data(), C, nxp, cen, off, axis, ref.data(), x0, x1);
+        forceScalarKernels(false);
+        for (int64_t t : detail::hwyRowTargets()) {
+          std::vector<uint16_t> out(ref.size(), uint16_t(0x1234));
+          detail::hwyPlusFacesKernel(t)(kv.data(), C, nxp, cen, off, axis, out.data(), x0, x1);
+          ASSERT_EQ(out, ref) << detail::hwyTargetName(t) << ", row " << row << ", axis " << axis << ", voxels "
+                              << x0 << ".." << x1;
+        }
+        for (int c = 0; c < C; ++c)
+          for (int x = x0; x < x1; ++x) (ref[size_t(c) * nxp + x] == detail::kNoFace ? unobserved : observed) += 1;
+      }
+  }
+  forceScalarKernels(was_forced);
+  EXPECT_GT(observed, 10000u) << "faces sampled";
+  EXPECT_GT(unobserved, 1000u) << "voxels a camera does not see (and the rows' padding)";
 }
 
 // The targets without a fused multiply-add (SSE4, EMU128, SCALAR) take the log term of a median

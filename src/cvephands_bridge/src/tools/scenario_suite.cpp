@@ -146,7 +146,8 @@ std::string isaText() {
     if (flags.find(std::string(" ") + f + " ") != std::string::npos) cpu += std::string(cpu.empty() ? "" : " ") + f;
   const char* kernels = psfs::avx512KernelsActive() ? "AVX-512"
                         : psfs::vectorKernelsActive() ? "AVX2"
-                                                      : "scalar";
+                        : psfs::scalarKernelsForced() ? "scalar"
+                                                      : "Highway's best target without AVX2 (SSE4, NEON)";
   return std::string("pSfS kernels ") + kernels + " (CPU flags: " + (cpu.empty() ? "none of avx2/avx512" : cpu) + ")";
 }
 
