@@ -17,6 +17,13 @@ namespace {
 // (u = 0) or from the image border must stay inside the pair image's replicated border.
 static_assert(ProjectionTable::kMaxSampleOffsetPx * PackedUV::kOne <= kPad16,
               "sample offsets must stay within the pair images' border");
+// The far side: from the not-observed marker's v = 16 * height (or a centre in the last pixel),
+// padded and moved by the largest offset, the quad's second row / column (+ 1) must still be
+// inside the pair image of height (width) + 2 kQuadPad: the Highway kernels gather the + faces
+// of unobserved lanes unmasked.
+static_assert((ProjectionTable::kMaxSampleOffsetPx * PackedUV::kOne + kPad16) / PackedUV::kOne + 2 <=
+                  2 * ViewEvidence::kQuadPad,
+              "sample offsets must stay within the pair images' far border");
 static_assert(kVoxLogScale == ViewEvidence::kLogScale && kVoxNoEvidence == ViewEvidence::kNoEvidence &&
                   kVoxQuadPad == ViewEvidence::kQuadPad && kVoxOne == PackedUV::kOne &&
                   kVoxChunk == ProjectionTable::kChunk,
