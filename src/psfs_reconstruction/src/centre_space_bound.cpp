@@ -121,7 +121,7 @@ void TermTiles::set(const uint8_t* bytes, size_t stride, int step, int width, in
   }
   tx0 = u0 / kTile, ty0 = v0 / kTile;
   tiles_x = u1 / kTile - tx0 + 1, tiles_y = v1 / kTile - ty0 + 1;
-  for (auto& l : level_) l.resize(size_t(tiles_x) * tiles_y);
+  level_[0].resize(size_t(tiles_x) * tiles_y);  // the squares sized by buildTileSquares
   // Whole tiles (clipped to the image), so a rectangle's tiles hold every pixel of it.
   const int pu0 = tx0 * kTile, pu1 = std::min(width - 1, (tx0 + tiles_x) * kTile - 1);
   const int pv0 = ty0 * kTile, pv1 = std::min(height - 1, (ty0 + tiles_y) * kTile - 1);
@@ -168,7 +168,7 @@ void TermTiles::set(const uint8_t* bytes, size_t stride, int step, int width, in
   if (clean_) {
     level8_[0].resize(level_[0].size());
     for (size_t i = 0; i < level_[0].size(); ++i) level8_[0][i] = uint8_t((level_[0][i] & 0x1FF) - 1);
-    buildTileSquares(level8_, kLevels, tiles_x, tiles_y, [](uint8_t a, uint8_t b) { return a > b ? a : b; });
+    buildTileSquares(level8_, kLevels, tiles_x, tiles_y, MaxOf());
     return;
   }
   // Squares of 2^l x 2^l tiles (tile_squares.h): any rectangle of tiles is the union of a few.
@@ -178,8 +178,7 @@ void TermTiles::set(const uint8_t* bytes, size_t stride, int step, int width, in
 void TermTiles::rectMax(int u0, int v0, int u1, int v1, int* max_byte_out, bool* off_out) const {
   const int a0 = u0 / kTile - tx0, a1 = u1 / kTile - tx0, b0 = v0 / kTile - ty0, b1 = v1 / kTile - ty0;
   if (clean_) {
-    *max_byte_out = tileSquaresOver(level8_, kLevels, tiles_x, a0, b0, a1, b1, uint8_t(0),
-                                    [](uint8_t a, uint8_t b) { return a > b ? a : b; });
+    *max_byte_out = tileSquaresOver(level8_, kLevels, tiles_x, a0, b0, a1, b1, uint8_t(0), MaxOf());
     *off_out = false;
     return;
   }

@@ -45,7 +45,7 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
   tiles_x = (width + kTile - 1) / kTile;
   tiles_y = (height + kTile - 1) / kTile;
   const size_t nt = size_t(tiles_x) * tiles_y;
-  for (auto& b : bound) b.assign(nt, 0);
+  bound[0].resize(nt);  // every tile written below; the squares sized by buildTileSquares
   row_min_.resize(size_t(width));
   // Whole tiles and a vector past the last (zeros: no byte is below 0) for the tiles' maxima.
   col_max_.resize(size_t(tiles_x) * kTile + 16);
@@ -123,12 +123,11 @@ void TileMaxImage::set(const uint8_t* likelihood, int width, int height, size_t 
         off_pixels += !active.empty() ? active.ptr<uint8_t>(v)[u] == 0 : terms[size_t(v) * width + u] > 0;
     absent = off_pixels == size_t(width) * height;
   }
-  buildTileSquares(bound, kLevels, tiles_x, tiles_y, [](int32_t a, int32_t b) { return a > b ? a : b; });
+  buildTileSquares(bound, kLevels, tiles_x, tiles_y, MaxOf());
 }
 
 int32_t TileMaxImage::rectMax(int tx0, int ty0, int tx1, int ty1) const {
-  return tileSquaresOver(bound, kLevels, tiles_x, tx0, ty0, tx1, ty1, std::numeric_limits<int32_t>::min(),
-                         [](int32_t a, int32_t b) { return a > b ? a : b; });
+  return tileSquaresOver(bound, kLevels, tiles_x, tx0, ty0, tx1, ty1, std::numeric_limits<int32_t>::min(), MaxOf());
 }
 
 void tileMaxImages(const ViewEvidence& evidence, int threads, std::vector<TileMaxImage>* out) {

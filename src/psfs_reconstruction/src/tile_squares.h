@@ -21,6 +21,12 @@ inline int tileSquareLevel(int side, int num_levels) {
   return l;
 }
 
+// The combination of figures that are upper bounds: the larger.
+struct MaxOf {
+  template <class T>
+  T operator()(T a, T b) const { return a > b ? a : b; }
+};
+
 // levels[1 .. num_levels - 1] from levels[0] (tiles_x * tiles_y figures, row by row);
 // combine(a, b): the figure of the union (commutative, associative, idempotent: e.g. max).
 template <class T, class Combine>
