@@ -88,12 +88,16 @@ void faceRowScalar(const PsfsRowParams& p, const uint32_t* centres, const uint32
     });
 }
 
-// Highway's face kernel for the best target the CPU and the switches allow (as selectPsfsRow):
-// `vector` is false on a CPU without AVX2 (an older x86, ARM), where it is still the best target
-// there (SSE4, NEON) unless the scalar kernels are forced.
+// The Highway target every kernel takes: the best the CPU and the switches allow. `vector` is
+// false on a CPU without AVX2 (an older x86, ARM), where that is still its best target (SSE4,
+// NEON); Highway's portable target only when the scalar kernels are forced.
+int64_t selectedHwyTarget(bool vector) {
+  return hwyRowTarget(vector || !scalarKernelsForced(), avx512KernelsActive());
+}
+
 template <int K>
 PsfsFaceRowFn pickFace(bool vector) {
-  return hwyFaceRowKernel(hwyRowTarget(vector || !scalarKernelsForced(), avx512KernelsActive()), K);
+  return hwyFaceRowKernel(selectedHwyTarget(vector), K);
 }
 
 PsfsRowFn referenceRow(int k) {
@@ -112,9 +116,7 @@ PsfsRowFn selectPsfsRow(int k, bool vector) {
   const int64_t forced = g_forced_row_target.load(std::memory_order_relaxed);
   if (forced == -1) return referenceRow(k);
   if (forced != 0) return hwyRowKernel(forced, k);
-  // `vector` is false on a CPU without AVX2 (an older x86, ARM): Highway's best target there
-  // (SSE4, NEON) unless the scalar kernels are forced.
-  return hwyRowKernel(hwyRowTarget(vector || !scalarKernelsForced(), avx512KernelsActive()), k);
+  return hwyRowKernel(selectedHwyTarget(vector), k);
 }
 
 void forceFaceRowKernelForTest(int64_t target) { g_forced_face_target.store(target); }
@@ -137,8 +139,8 @@ void plusFacesOfRow(const KernelView* views, int num_cameras, int nxp, const uin
   if (x_begin < 0 || x_end > nxp || x_begin % ProjectionTable::kChunk != 0 || x_end % ProjectionTable::kChunk != 0)
     throw std::logic_error("psfs::plusFacesOfRow: x range must be whole chunks of the row");
   if (!scalarKernelsForced()) {  // Highway's best target; else the reference below
-    hwyPlusFacesKernel(hwyRowTarget(true, avx512KernelsActive()))(views, num_cameras, nxp, centres, offsets, axis,
-                                                                  faces, x_begin, x_end);
+    hwyPlusFacesKernel(selectedHwyTarget(true))(views, num_cameras, nxp, centres, offsets, axis, faces, x_begin,
+                                                x_end);
     return;
   }
   const int chunks = nxp / ProjectionTable::kChunk;
