@@ -233,18 +233,35 @@ HWY_INLINE VI middlePair6Lanes(VI s[6]) {  // = middlePair6
 // -y or -z faces from a face buffer (kNoFace: sample from this voxel at s), and this row's
 // + faces stored back for the next row / layer; `left` entries from buf on belong to this
 // camera's row (the buffer is readable 16 entries past the last one).
+// A row's packed centres from src, of which `left` belong to the row (a shorter tail is loaded
+// masked: its other lanes read 0), and the lanes whose voxel the camera observes.
+HWY_INLINE VU centreLanes(const uint32_t* src, int left, uint32_t not_observed, hn::Mask<DI>* obs) {
+  const DI di;
+  const DU du;
+  const bool whole = left >= static_cast<int>(hn::Lanes(di));
+  const VU uv = whole ? hn::LoadU(du, src) : hn::MaskedLoad(hn::FirstN(du, left), du, src);
+  *obs = hn::RebindMask(di, hn::Ne(uv, hn::Set(du, not_observed)));
+  if (!whole) *obs = hn::And(*obs, hn::FirstN(di, left));
+  return uv;
+}
+
+// Faces (lanes in [0, 0xFFFF]) as uint16 into dst: the first `left` lanes only.
+HWY_INLINE void storeFaceLanes(VI faces, uint16_t* dst, int left) {
+  const hn::Rebind<uint16_t, DI> d16;
+  if (left >= static_cast<int>(hn::Lanes(d16))) {
+    hn::StoreU(hn::DemoteTo(d16, faces), d16, dst);
+  } else {
+    hn::BlendedStore(hn::DemoteTo(d16, faces), hn::FirstN(d16, static_cast<size_t>(left)), d16, dst);
+  }
+}
+
 HWY_INLINE VI carryFaces(const KernelView& v, uint16_t* buf, int left, VI plus, hn::Mask<DI> obs, VU s) {
   const DI di;
   const hn::Rebind<uint16_t, DI> d16;
   const VI nf = hn::Set(di, kNoFace);
   const VI below = hn::PromoteTo(di, hn::LoadU(d16, buf));
   const auto need = hn::And(obs, hn::Eq(below, nf));
-  const auto keep = hn::DemoteTo(d16, hn::IfThenElse(obs, plus, nf));
-  if (left >= static_cast<int>(hn::Lanes(di))) {
-    hn::StoreU(keep, d16, buf);
-  } else {
-    hn::BlendedStore(keep, hn::FirstN(d16, static_cast<size_t>(left)), d16, buf);
-  }
+  storeFaceLanes(hn::IfThenElse(obs, plus, nf), buf, left);
   if (hn::AllFalse(di, need)) return below;
   return bilinearLanesMasked(v, below, need, s);
 }
@@ -306,7 +323,6 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
   const DI di;
   const DU du;
   const int lanes = static_cast<int>(hn::Lanes(di));
-  const bool whole = left >= lanes;
   const VI zero = hn::Zero(di), no_ev = hn::Set(di, kVoxNoEvidence);
   const VU pad = hn::Set(du, static_cast<uint32_t>(kPad16) * 0x10001u);  // both coordinates
   VU uv[N], base[N];
@@ -322,9 +338,7 @@ HWY_INLINE void faceCameras(const PsfsRowParams& p, int c0, int chunk, int x0, i
   for (int j = 0; j < N; ++j) {
     const int c = c0 + j;
     const uint32_t* src = centres + size_t(c) * p.nxp + x0;
-    uv[j] = whole ? hn::LoadU(du, src) : hn::MaskedLoad(hn::FirstN(du, left), du, src);
-    obs[j] = hn::RebindMask(di, hn::Ne(uv[j], hn::Set(du, p.views[c].not_observed)));
-    if (!whole) obs[j] = hn::And(obs[j], hn::FirstN(di, left));
+    uv[j] = centreLanes(src, left, p.views[c].not_observed, &obs[j]);
     base[j] = hn::Add(uv[j], pad);
     off0[j] = offsets + (size_t(c) * p.chunks + chunk) * 3;
     off1[j] = left > ProjectionTable::kChunk ? off0[j] + 3 : off0[j];
@@ -417,7 +431,6 @@ void PlusFacesRow(const KernelView* views, int num_cameras, int nxp, const uint3
                   const uint32_t* offsets, int axis, uint16_t* faces, int x_begin, int x_end) {
   const DI di;
   const DU du;
-  const hn::Rebind<uint16_t, DI> d16;
   const int lanes = static_cast<int>(hn::Lanes(di));
   const int chunks = nxp / ProjectionTable::kChunk;
   const VU pad = hn::Set(du, static_cast<uint32_t>(kPad16) * 0x10001u);
@@ -426,20 +439,12 @@ void PlusFacesRow(const KernelView* views, int num_cameras, int nxp, const uint3
     const KernelView& v = views[c];
     for (int x0 = x_begin; x0 < x_end; x0 += lanes) {
       const int left = x_end - x0;
-      const bool whole = left >= lanes;
-      const uint32_t* src = centres + size_t(c) * nxp + x0;
-      const VU uv = whole ? hn::LoadU(du, src) : hn::MaskedLoad(hn::FirstN(du, left), du, src);
-      auto obs = hn::RebindMask(di, hn::Ne(uv, hn::Set(du, v.not_observed)));
-      if (!whole) obs = hn::And(obs, hn::FirstN(di, left));
+      hn::Mask<DI> obs;
+      const VU uv = centreLanes(centres + size_t(c) * nxp + x0, left, v.not_observed, &obs);
       const uint32_t* off0 = offsets + (size_t(c) * chunks + x0 / ProjectionTable::kChunk) * 3;
       const uint32_t* off1 = left > ProjectionTable::kChunk ? off0 + 3 : off0;
       const VI f = bilinearLanesMasked(v, nf, obs, plusOffset(hn::Add(uv, pad), chunkOffsets(du, off0, off1, axis)));
-      uint16_t* dst = faces + size_t(c) * nxp + x0;
-      if (whole) {
-        hn::StoreU(hn::DemoteTo(d16, f), d16, dst);
-      } else {
-        hn::BlendedStore(hn::DemoteTo(d16, f), hn::FirstN(d16, static_cast<size_t>(left)), d16, dst);
-      }
+      storeFaceLanes(f, faces + size_t(c) * nxp + x0, left);
     }
   }
 }
